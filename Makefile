@@ -1,0 +1,29 @@
+# nnik: two commands do everything on a fresh machine: `make demo` and `make test`.
+PYTHON ?= python3
+SCENARIO ?= datasets/galvo_cba2012.toml
+STAMP := .setup.stamp
+
+.PHONY: setup toolchains demo test bench clean
+
+# torch first, pinned to the local CPU build: a bare `torch` requirement would pull CUDA.
+$(STAMP): pyproject.toml
+	$(PYTHON) -m pip install --quiet torch==2.13.0
+	$(PYTHON) -m pip install --quiet -e '.[dev]'
+	touch $(STAMP)
+
+setup: $(STAMP)
+
+toolchains:
+	bash scripts/install_toolchains.sh
+
+demo: setup
+	$(PYTHON) -m nnik run $(SCENARIO)
+
+test: setup toolchains
+	bash scripts/run_tests.sh
+
+bench: setup toolchains
+	$(PYTHON) -m nnik.bench
+
+clean:
+	rm -rf build $(STAMP)

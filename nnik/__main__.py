@@ -1,0 +1,5 @@
+import sys
+
+from nnik.cli import main
+
+sys.exit(main())

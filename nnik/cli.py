@@ -1,0 +1,137 @@
+"""The `nnik` command line. Bad input ends in one line on stderr and exit code 2."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+from rich.console import Console
+from rich.table import Table
+
+from nnik import pipeline
+from nnik.errors import NnikError
+
+console = Console(highlight=False, width=None if sys.stdout.isatty() else 140)
+
+
+def _fmt(values, digits=3) -> str:
+    return " / ".join(f"{v:.{digits}f}" for v in values)
+
+
+def print_accuracy(m: dict) -> None:
+    unit = m["unit"]
+    t = Table(title=f"{m['name']}: {'-'.join(map(str, m['network']['shape']))} {m['network']['mode']} MLP, "
+                    f"error vs {m['dataset']['truth']} ({m['dataset']['n_test']} test points)")
+    t.add_column("model")
+    for o in m["outputs"]:
+        t.add_column(f"{o} max ({unit})", justify="right")
+    t.add_column(f"RMS ({unit})", justify="right")
+    t.add_column(f"p99 ({unit})", justify="right")
+    t.add_column("rel. % (004)", justify="right")
+    rows = [("affine least squares", m["affine_only"]), ("MLP float64", m["float"])]
+    for label, s in rows:
+        rel = _fmt(s["rel_pct"], 4) if "rel_pct" in s else "-"
+        t.add_row(label, *[f"{v:.4f}" for v in s["max_abs"]], _fmt(s["rms"], 4), _fmt(s["p99"], 4), rel)
+    console.print(t)
+    pos = m["float"].get("position_um")
+    if pos:
+        console.print(f"position error of the float MLP's commands: max {pos['max']:.2f} um, RMS {pos['rms']:.2f} um")
+    console.print(f"ONNX vs torch: max |diff| {m['onnx']['max_abs_diff']:.2e} (tolerance {m['onnx']['tolerance']:g}); "
+                  f"training {m['train_seconds']:.1f} s")
+
+
+def _outdir(args, scn) -> Path:
+    return Path(args.outdir) if args.outdir else pipeline.default_outdir(scn, not args.no_normalize)
+
+
+def cmd_run(args) -> None:
+    from nnik.scenario import load_scenario
+
+    t0 = time.perf_counter()
+    scn = load_scenario(args.scenario)
+    out = _outdir(args, scn)
+    console.print(f"[bold]nnik run[/bold] {scn.source} -> {out}/")
+    ds = pipeline.generate(scn, out)
+    console.print(f"generated {', '.join(f'{len(v)} {k}' for k, v in ds.p.items())} points ({scn.dataset['sampling']})")
+    pipeline.train(scn, out, normalize=False if args.no_normalize else None)
+    m = pipeline.evaluate(out)
+    print_accuracy(m)
+    console.print(f"done in {time.perf_counter() - t0:.1f} s; metrics: {out / pipeline.METRICS_FILE}")
+
+
+def cmd_generate(args) -> None:
+    from nnik.scenario import load_scenario
+
+    scn = load_scenario(args.scenario)
+    out = _outdir(args, scn)
+    ds = pipeline.generate(scn, out)
+    console.print(f"wrote {out / pipeline.DATA_FILE}: {', '.join(f'{len(v)} {k}' for k, v in ds.p.items())} points")
+
+
+def cmd_train(args) -> None:
+    from nnik.scenario import load_scenario
+
+    scn = load_scenario(args.scenario)
+    out = _outdir(args, scn)
+    model = pipeline.train(scn, out, normalize=False if args.no_normalize else None)
+    console.print(f"wrote {out / pipeline.MODEL_FILE} and {out / pipeline.ONNX_FILE} ({model.train_seconds:.1f} s)")
+
+
+def cmd_evaluate(args) -> None:
+    print_accuracy(pipeline.evaluate(Path(args.model_dir)))
+
+
+def cmd_synth_csv(args) -> None:
+    from nnik.scenario import load_scenario
+    from nnik.synth import synthesize_measurements
+
+    scn = load_scenario(args.scenario)
+    n = synthesize_measurements(scn, Path(args.output), args.n, args.noise_um, args.seed)
+    console.print(f"wrote {args.output}: {n} rows from {scn.source} with {args.noise_um:g} um measurement noise")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    ap = argparse.ArgumentParser(prog="nnik", description="Inverse kinematics as verified fixed-point C for 8-bit MCUs.")
+    sub = ap.add_subparsers(dest="command", required=True)
+
+    def scenario_cmd(name, func, help_):
+        p = sub.add_parser(name, help=help_)
+        p.add_argument("scenario", help="scenario TOML file")
+        p.add_argument("-o", "--outdir", help="output directory (default build/<name>/)")
+        p.add_argument("--no-normalize", action="store_true", help="train on raw mm inputs (seed 004's Table 1 'without')")
+        p.set_defaults(func=func)
+        return p
+
+    scenario_cmd("run", cmd_run, "generate, train, export and evaluate a scenario")
+    scenario_cmd("generate", cmd_generate, "sample the workspace and label it with the exact IK")
+    scenario_cmd("train", cmd_train, "train the MLP on OUTDIR/data.npz, write model.pt and model.onnx")
+    p = sub.add_parser("evaluate", help="accuracy of a trained model against the truth")
+    p.add_argument("model_dir")
+    p.set_defaults(func=cmd_evaluate)
+    p = sub.add_parser("synth-csv", help="write a calibration CSV measured on a simulated machine")
+    p.add_argument("scenario", help="scenario of the machine to 'measure' (an analytic one)")
+    p.add_argument("-o", "--output", required=True, help="CSV to write (x_um,y_um,q1,q2)")
+    p.add_argument("-n", type=int, default=400, help="number of measured points")
+    p.add_argument("--noise-um", type=float, default=2.0, help="measurement noise, 1 sigma, per axis")
+    p.add_argument("--seed", type=int, default=0)
+    p.set_defaults(func=cmd_synth_csv)
+    return ap
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    try:
+        args.func(args)
+    except NnikError as exc:
+        print(f"nnik: error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("nnik: interrupted", file=sys.stderr)
+        return 130
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,107 @@
+"""Typed, validated keys for TOML tables: every bad value becomes one clear NnikError line."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any, Callable
+
+from nnik.errors import NnikError
+
+
+@dataclass(frozen=True)
+class Param:
+    """One allowed key of a TOML table."""
+
+    kind: str  # "float" | "int" | "str" | "bool" | "range" (two floats lo < hi) | "intlist" | "table"
+    required: bool = False
+    default: Any = None
+    choices: tuple = ()
+    check: Callable[[Any], str | None] | None = None  # returns a problem description or None
+    doc: str = ""
+
+
+def positive(v):
+    return None if v > 0 else f"must be > 0, got {v}"
+
+
+def non_negative(v):
+    return None if v >= 0 else f"must be >= 0, got {v}"
+
+
+def _coerce(value: Any, p: Param) -> Any:
+    """Convert a TOML value to the declared kind, or return an error string."""
+    if p.kind == "float":
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            return TypeError(f"expected a number, got {value!r}")
+        value = float(value)
+        if not math.isfinite(value):
+            return TypeError(f"must be a finite number, got {value!r}")
+        return value
+    if p.kind == "int":
+        if isinstance(value, bool) or not isinstance(value, int):
+            return TypeError(f"expected an integer, got {value!r}")
+        return value
+    if p.kind == "str":
+        if not isinstance(value, str):
+            return TypeError(f"expected a string, got {value!r}")
+        return value
+    if p.kind == "bool":
+        if not isinstance(value, bool):
+            return TypeError(f"expected true or false, got {value!r}")
+        return value
+    if p.kind == "range":
+        if not isinstance(value, list) or len(value) != 2:
+            return TypeError(f"expected [min, max], got {value!r}")
+        out = []
+        for v in value:
+            c = _coerce(v, Param("float"))
+            if isinstance(c, Exception):
+                return c
+            out.append(c)
+        if not out[0] < out[1]:
+            return TypeError(f"min must be < max, got {value!r}")
+        return (out[0], out[1])
+    if p.kind == "intlist":
+        if not isinstance(value, list) or not value:
+            return TypeError(f"expected a non-empty list of integers, got {value!r}")
+        if any(isinstance(v, bool) or not isinstance(v, int) or v <= 0 for v in value):
+            return TypeError(f"expected positive integers, got {value!r}")
+        return tuple(value)
+    if p.kind == "table":
+        if not isinstance(value, dict):
+            return TypeError(f"expected a table, got {value!r}")
+        return value
+    raise AssertionError(p.kind)
+
+
+def validate_table(
+    table: Any, schema: dict[str, Param], source: str, section: str, owner: str | None = None
+) -> dict[str, Any]:
+    """Check a TOML table against its schema; returns the values with defaults filled in."""
+    where = f"[{section}]"
+    if not isinstance(table, dict):
+        raise NnikError(f"expected a table, got {table!r}", source, where)
+    for key in table:
+        if key not in schema:
+            allowed = ", ".join(sorted(schema))
+            used_by = f" by {owner}" if owner else ""
+            raise NnikError(f"unknown key (allowed{used_by}: {allowed})", source, f"{where} {key}")
+    out: dict[str, Any] = {}
+    for key, p in schema.items():
+        if key not in table:
+            if p.required:
+                raise NnikError("missing required key", source, f"{where} {key}")
+            out[key] = p.default
+            continue
+        value = _coerce(table[key], p)
+        if isinstance(value, Exception):
+            raise NnikError(str(value), source, f"{where} {key}")
+        if p.choices and value not in p.choices:
+            raise NnikError(f"must be one of {', '.join(map(str, p.choices))}; got {value!r}", source, f"{where} {key}")
+        if p.check is not None:
+            problem = p.check(value)
+            if problem:
+                raise NnikError(problem, source, f"{where} {key}")
+        out[key] = value
+    return out

@@ -1,0 +1,150 @@
+"""Scenario files (TOML): the user-facing contract. Every problem is one line naming file and key."""
+
+from __future__ import annotations
+
+import math
+import re
+import tomllib
+from dataclasses import dataclass
+from pathlib import Path
+
+from nnik.actuator import SCHEMAS as ACTUATOR_SCHEMAS
+from nnik.actuator import Actuator
+from nnik.errors import NnikError
+from nnik.kinematics import KINDS, Mechanism, Workspace
+from nnik.params import Param, positive, validate_table
+
+
+def _c_identifier(v):
+    return None if re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]{0,40}", v) else f"must be a C identifier, got {v!r}"
+
+
+def _at_least(n):
+    return lambda v: None if v >= n else f"must be >= {n}, got {v}"
+
+
+TOP = {
+    "name": Param("str", required=True, check=_c_identifier, doc="prefixes generated symbols and the output dir"),
+    "description": Param("str", default=""),
+    "mechanism": Param("table", required=True),
+    "actuator": Param("table", required=True),
+    "workspace": Param("table", required=True),
+    "dataset": Param("table", default={}),
+    "network": Param("table", default={}),
+    "training": Param("table", default={}),
+}
+WORKSPACE = {"x_mm": Param("range", required=True), "y_mm": Param("range", required=True)}
+DATASET = {
+    "n_train": Param("int", default=1000, check=_at_least(10)),
+    "n_val": Param("int", default=0, check=_at_least(0), doc="0 = n_train / 4 (at least 200)"),
+    "n_test": Param("int", default=20000, check=_at_least(10)),
+    "sampling": Param("str", default="sobol", choices=("sobol", "uniform", "grid")),
+    "seed": Param("int", default=0, check=_at_least(0)),
+}
+NETWORK = {
+    "hidden": Param("intlist", default=(6,), doc="hidden tanh layer sizes"),
+    "mode": Param("str", default="full", choices=("full", "residual")),
+    "normalize": Param("bool", default=True, doc="normalise inputs to [-1, 1] (seed 004's fix)"),
+}
+TRAINING = {
+    "max_seconds": Param("float", default=60.0, check=positive, doc="wall-clock budget"),
+    "adam_steps": Param("int", default=3000, check=_at_least(0)),
+    "adam_lr": Param("float", default=0.01, check=positive),
+    "lbfgs_rounds": Param("int", default=400, check=_at_least(0), doc="L-BFGS outer iterations"),
+    "restarts": Param("int", default=3, check=_at_least(1), doc="independent initialisations; best kept"),
+    "patience": Param("int", default=40, check=_at_least(1), doc="rounds without validation gain"),
+}
+
+
+@dataclass
+class Scenario:
+    name: str
+    source: str
+    raw: dict
+    base_dir: Path
+    mechanism: Mechanism
+    actuator: Actuator
+    workspace: Workspace
+    dataset: dict
+    network: dict
+    training: dict
+
+    @property
+    def outputs(self) -> list[str]:
+        return list(self.mechanism.joint_names)
+
+    @property
+    def unit(self) -> str:
+        return self.actuator.unit
+
+    @classmethod
+    def from_dict(cls, raw: dict, source: str, base_dir: Path) -> "Scenario":
+        top = validate_table(raw, TOP, source, "top level")
+        ws = validate_table(top["workspace"], WORKSPACE, source, "workspace")
+        workspace = Workspace(ws["x_mm"], ws["y_mm"])
+
+        act_raw = top["actuator"]
+        if not isinstance(act_raw, dict) or "kind" not in act_raw:
+            raise NnikError("missing required key", source, "[actuator] kind")
+        if act_raw["kind"] not in ACTUATOR_SCHEMAS:
+            raise NnikError(f"must be one of {', '.join(ACTUATOR_SCHEMAS)}; got {act_raw['kind']!r}", source, "[actuator] kind")
+        act = validate_table(act_raw, ACTUATOR_SCHEMAS[act_raw["kind"]], source, "actuator", act_raw["kind"])
+        actuator = Actuator.from_params(act)
+
+        mech_raw = top["mechanism"]
+        if not isinstance(mech_raw, dict) or "kind" not in mech_raw:
+            raise NnikError("missing required key", source, "[mechanism] kind")
+        kind = mech_raw["kind"]
+        if kind not in KINDS:
+            raise NnikError(f"must be one of {', '.join(KINDS)}; got {kind!r}", source, "[mechanism] kind")
+        cls_ = KINDS[kind]
+        schema = {"kind": Param("str", required=True), **cls_.PARAMS}
+        mech = validate_table(mech_raw, schema, source, "mechanism", kind)
+        mech.pop("kind")
+        if cls_.family == "belt":
+            if actuator.kind != "stepper":
+                raise NnikError("belt machines are driven by steppers, not a DAC", source, "[actuator] kind")
+            for r in ("R1_mm", "R2_mm"):
+                if mech[r] is None:
+                    if act["mm_per_rev"] is None:
+                        raise NnikError(f"give [mechanism] {r} or [actuator] mm_per_rev", source, f"[mechanism] {r}")
+                    mech[r] = act["mm_per_rev"] / (2 * math.pi)
+        if cls_.family == "measured":
+            mech["csv"] = str((base_dir / mech["csv"]).resolve())
+        mechanism = cls_(mech, workspace, source)
+        mechanism.check_reach()
+        if mechanism.analytic:
+            units = actuator.to_units(mechanism.inverse(workspace.boundary()) - mechanism.q_rest)
+            actuator.check_range(units, source)
+
+        dataset = validate_table(top["dataset"], DATASET, source, "dataset")
+        if dataset["n_val"] == 0:
+            dataset["n_val"] = max(200, dataset["n_train"] // 4)
+        network = validate_table(top["network"], NETWORK, source, "network")
+        training = validate_table(top["training"], TRAINING, source, "training")
+        return cls(
+            name=top["name"],
+            source=source,
+            raw=raw,
+            base_dir=base_dir,
+            mechanism=mechanism,
+            actuator=actuator,
+            workspace=workspace,
+            dataset=dataset,
+            network=network,
+            training=training,
+        )
+
+
+def load_scenario(path: str | Path) -> Scenario:
+    path = Path(path)
+    source = str(path)
+    if not path.is_file():
+        raise NnikError("scenario file not found", source)
+    try:
+        raw = tomllib.loads(path.read_text())
+    except tomllib.TOMLDecodeError as exc:
+        raise NnikError(f"malformed TOML: {exc}", source) from None
+    except UnicodeDecodeError:
+        raise NnikError("not a UTF-8 text file", source) from None
+    return Scenario.from_dict(raw, source, path.parent.resolve())

@@ -1,0 +1,39 @@
+"""Shared fixtures: the shipped scenarios, run once per session through the real pipeline."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from nnik import pipeline
+from nnik.scenario import load_scenario
+
+ROOT = Path(__file__).resolve().parents[1]
+DATASETS = ROOT / "datasets"
+
+
+def _run(name: str, outdir: Path) -> Path:
+    scn = load_scenario(DATASETS / f"{name}.toml")
+    pipeline.generate(scn, outdir)
+    pipeline.train(scn, outdir, progress=False)
+    pipeline.evaluate(outdir)
+    return outdir
+
+
+@pytest.fixture(scope="session")
+def galvo_run(tmp_path_factory) -> Path:
+    """build dir of datasets/galvo_cba2012.toml after generate/train/evaluate."""
+    return _run("galvo_cba2012", tmp_path_factory.mktemp("galvo_cba2012"))
+
+
+@pytest.fixture(scope="session")
+def corexy_run(tmp_path_factory) -> Path:
+    """build dir of datasets/corexy_nonlinear.toml (residual mode) after generate/train/evaluate."""
+    return _run("corexy_nonlinear", tmp_path_factory.mktemp("corexy_nonlinear"))
+
+
+def write_toml(tmp_path: Path, text: str, name: str = "s.toml") -> Path:
+    p = tmp_path / name
+    p.write_text(text)
+    return p
