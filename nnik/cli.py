@@ -31,15 +31,29 @@ def print_accuracy(m: dict) -> None:
     t.add_column(f"p99 ({unit})", justify="right")
     t.add_column("rel. % (004)", justify="right")
     rows = [("affine least squares", m["affine_only"]), ("MLP float64", m["float"])]
+    if "fixed" in m:
+        rows.append((f"MLP fixed point, pre-rounding", m["fixed"]))
+        rows.append(("MLP fixed point, delivered", {"max_abs": m["fixed"]["delivered_max_abs"],
+                                                    "rms": m["fixed"]["delivered_rms"]}))
     for label, s in rows:
         rel = _fmt(s["rel_pct"], 4) if "rel_pct" in s else "-"
-        t.add_row(label, *[f"{v:.4f}" for v in s["max_abs"]], _fmt(s["rms"], 4), _fmt(s["p99"], 4), rel)
+        p99 = _fmt(s["p99"], 4) if "p99" in s else "-"
+        t.add_row(label, *[f"{v:.4f}" for v in s["max_abs"]], _fmt(s["rms"], 4), p99, rel)
     console.print(t)
     pos = m["float"].get("position_um")
     if pos:
         console.print(f"position error of the float MLP's commands: max {pos['max']:.2f} um, RMS {pos['rms']:.2f} um")
     console.print(f"ONNX vs torch: max |diff| {m['onnx']['max_abs_diff']:.2e} (tolerance {m['onnx']['tolerance']:g}); "
                   f"training {m['train_seconds']:.1f} s")
+    if "fixed" in m:
+        f = m["fixed"]
+        console.print(f"fixed point: tanh '{f['tanh_variant']}', int{f['weight_bits']} weights, "
+                      f"{f['weights_bytes']} bytes of tables, model hash {f['model_hash']}")
+    if "host" in m:
+        h = m["host"]
+        console.print(f"host C (gcc, UBSan+ASan): {h['points']} points, {h['mismatches']} mismatches vs the integer model, "
+                      f"overflows {sum(h['overflows'].values())}, saturations in domain "
+                      f"{sum(v for k, v in h['saturations'].items() if k != 'outside')}")
 
 
 def _outdir(args, scn) -> Path:
@@ -57,6 +71,11 @@ def cmd_run(args) -> None:
     console.print(f"generated {', '.join(f'{len(v)} {k}' for k, v in ds.p.items())} points ({scn.dataset['sampling']})")
     pipeline.train(scn, out, normalize=False if args.no_normalize else None)
     m = pipeline.evaluate(out)
+    if not args.no_normalize:
+        pipeline.export(out)
+        console.print(f"exported C to {out / pipeline.C_DIR}/; verifying on the host ...")
+        pipeline.verify(out, "host")
+        m = pipeline.load_metrics(out)
     print_accuracy(m)
     console.print(f"done in {time.perf_counter() - t0:.1f} s; metrics: {out / pipeline.METRICS_FILE}")
 
@@ -81,6 +100,43 @@ def cmd_train(args) -> None:
 
 def cmd_evaluate(args) -> None:
     print_accuracy(pipeline.evaluate(Path(args.model_dir)))
+
+
+def cmd_export(args) -> None:
+    out = Path(args.model_dir)
+    im = pipeline.export(out)
+    console.print(f"wrote {out / pipeline.C_DIR}/{im.name}.h and {im.name}.c ({im.weights_bytes()} bytes of tables)")
+    print_accuracy(pipeline.load_metrics(out))
+
+
+def cmd_verify(args) -> None:
+    out = Path(args.model_dir)
+    res = pipeline.verify(out, args.target)
+    print_accuracy(pipeline.load_metrics(out))
+    if not res.get("bit_exact", False):
+        raise NnikError(f"{args.target}: {res.get('mismatches')} mismatches between the C and the integer model")
+
+
+def cmd_tanh(args) -> None:
+    from nnik import activations
+
+    rows = activations.variants_table()
+    t = Table(title="tanh replacements: int16 Q3.12 in, Q15 out, all 65536 inputs swept (errors in LSB of Q15)")
+    for c in ("variant", "form", "segments", "degree", "float max", "float RMS", "int max LSB", "int RMS LSB",
+              "mults", "bytes"):
+        t.add_column(c, justify="left" if c in ("variant", "form") else "right")
+    for r in rows:
+        name = r["name"] + (" (default)" if r["default"] else "")
+        t.add_row(name, r["form"], str(r["segments"]), str(r["degree"]), f"{r['float_max']:.2e}",
+                  f"{r['float_rms']:.2e}", f"{r['int_max_lsb']:.2f}", f"{r['int_rms_lsb']:.3f}", str(r["mults"]),
+                  str(r["bytes"]))
+    console.print(t)
+    for r in rows:
+        console.print(f"  {r['name']}: {r['description']}")
+    rep = activations.paper_report()
+    console.print(f"seed 000's configuration ([0,1], (1,2], (2,3], (3,5.3], degree 5, least squares): our fit RMS "
+                  f"{rep['fit_rms_0_5p3']:.3e} and max {rep['fit_max_0_5p3']:.3e} on [0, 5.3]; the paper's printed "
+                  f"coefficients give RMS {rep['printed_rms_0_6']:.4e} on [0, 6] (published: {rep['published_rms']:.4e})")
 
 
 def cmd_synth_csv(args) -> None:
@@ -110,6 +166,15 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("evaluate", help="accuracy of a trained model against the truth")
     p.add_argument("model_dir")
     p.set_defaults(func=cmd_evaluate)
+    p = sub.add_parser("export", help="quantise a trained model and write its fixed-point C")
+    p.add_argument("model_dir")
+    p.set_defaults(func=cmd_export)
+    p = sub.add_parser("verify", help="run the generated C and compare it bit for bit with the integer model")
+    p.add_argument("model_dir")
+    p.add_argument("--target", default="host", choices=("host", "avr", "pic18"))
+    p.set_defaults(func=cmd_verify)
+    p = sub.add_parser("tanh", help="table of the tanh replacements and their measured errors")
+    p.set_defaults(func=cmd_tanh)
     p = sub.add_parser("synth-csv", help="write a calibration CSV measured on a simulated machine")
     p.add_argument("scenario", help="scenario of the machine to 'measure' (an analytic one)")
     p.add_argument("-o", "--output", required=True, help="CSV to write (x_um,y_um,q1,q2)")

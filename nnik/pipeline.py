@@ -82,9 +82,78 @@ def evaluate(outdir: Path) -> dict:
     return metrics
 
 
+def load_metrics(outdir: Path) -> dict:
+    path = outdir / METRICS_FILE
+    if not path.is_file():
+        raise NnikError("no metrics.json (run `nnik evaluate` first)", str(outdir))
+    return json.loads(path.read_text())
+
+
 def write_metrics(outdir: Path, metrics: dict, merge: bool = True) -> None:
     """Write OUTDIR/metrics.json; later steps merge their own sections into it."""
     path = outdir / METRICS_FILE
     old = json.loads(path.read_text()) if merge and path.is_file() else {}
     old.update(metrics)
     path.write_text(json.dumps(old, indent=2) + "\n")
+
+
+# ---- fixed point: quantise, generate C, verify on the host -----------------------------------
+C_DIR = "c"
+FIXED_EVAL_FILE = "fixed_eval.npz"
+
+
+def _truth_for_um(scn, in_um: np.ndarray, fallback_q: np.ndarray) -> np.ndarray:
+    """The exact IK at the integer-um inputs the C sees (analytic), or the held-out rows."""
+    from nnik.data import exact_targets
+
+    return exact_targets(scn, in_um / 1000.0) if scn.mechanism.analytic else fallback_q
+
+
+def export(outdir: Path):
+    """Quantise model.pt, write OUTDIR/c/NAME.{h,c}; returns the integer model."""
+    from nnik import fixedpoint as fx
+    from nnik.export import render_model_c, write_sources
+
+    model = TrainedModel.load(outdir / MODEL_FILE)
+    ds = Dataset.load(outdir / DATA_FILE)
+    scn = model.scenario
+    tanh = None if scn.export["tanh"] == "default" else scn.export["tanh"]
+    im = fx.quantize(model, tanh_variant=tanh, weight_bits=scn.export["weight_bits"],
+                     calib=fx.calibration_set(model, ds.p["train"], ds.q["train"]))
+    write_sources(render_model_c(im, scn.source), outdir / C_DIR)
+    in_um = np.rint(ds.p["test"] * 1000).astype(np.int64)
+    truth = _truth_for_um(scn, in_um, ds.q["test"])
+    total, delivered, _ = im.run(in_um)
+    pre = total / float(2**im.out.F)
+    stats = error_stats(pre, truth)
+    ranges = fx.range_report(im, np.concatenate([fx.dense_inputs_um(im), in_um]))
+    if not all(r["within_bound"] for r in ranges):
+        raise NnikError("range analysis failed: a tensor exceeded its proven bound", str(outdir))
+    from nnik import activations
+
+    tanh_stats = activations.sweep(im.tanh_variant)
+    write_metrics(outdir, {
+        "fixed": {**stats, "delivered_max_abs": np.abs(delivered - truth).max(0).tolist(),
+                  "delivered_rms": np.sqrt(((delivered - truth) ** 2).mean(0)).tolist(),
+                  "tanh_variant": im.tanh_variant, "weight_bits": im.weight_bits,
+                  "weights_bytes": im.weights_bytes(), "model_hash": im.model_hash(),
+                  "q_formats": im.formats(), "ranges": ranges},
+        "tanh": {"variant": im.tanh_variant, **{k: tanh_stats[k] for k in ("max_lsb", "rms_lsb") if k in tanh_stats}},
+    })
+    np.savez_compressed(outdir / FIXED_EVAL_FILE, p_test=ds.p["test"], q_true=truth, q_float=model.predict(ds.p["test"]),
+                        q_fixed=pre, q_delivered=delivered)
+    return im
+
+
+def verify(outdir: Path, target: str = "host"):
+    """Run the generated C on a target and compare it bit for bit with the integer model."""
+    from nnik.verify_host import verification_inputs, verify_host
+
+    im = export(outdir)  # deterministic: regenerates the same C and integer model
+    ds = Dataset.load(outdir / DATA_FILE)
+    if target == "host":
+        res = verify_host(im, outdir / C_DIR, verification_inputs(im, ds.p["test"]))
+        write_metrics(outdir, {"host": res})
+        return res
+    raise NnikError(f"unknown target {target!r} (host, avr, pic18)")
+

@@ -32,6 +32,7 @@ TOP = {
     "dataset": Param("table", default={}),
     "network": Param("table", default={}),
     "training": Param("table", default={}),
+    "export": Param("table", default={}),
 }
 WORKSPACE = {"x_mm": Param("range", required=True), "y_mm": Param("range", required=True)}
 DATASET = {
@@ -55,6 +56,12 @@ TRAINING = {
     "patience": Param("int", default=40, check=_at_least(1), doc="rounds without validation gain"),
 }
 
+EXPORT = {
+    "tanh": Param("str", default="default", doc="tanh replacement variant (see `nnik tanh`)"),
+    "weight_bits": Param("int", default=16, choices=(8, 16), doc="weight storage: int16 or int8"),
+    "lut_bytes": Param("int", default=0, check=_at_least(0), doc="LUT baseline flash budget; 0 = the MLP's bytes"),
+}
+
 
 @dataclass
 class Scenario:
@@ -68,6 +75,7 @@ class Scenario:
     dataset: dict
     network: dict
     training: dict
+    export: dict
 
     @property
     def outputs(self) -> list[str]:
@@ -122,6 +130,12 @@ class Scenario:
             dataset["n_val"] = max(200, dataset["n_train"] // 4)
         network = validate_table(top["network"], NETWORK, source, "network")
         training = validate_table(top["training"], TRAINING, source, "training")
+        export = validate_table(top["export"], EXPORT, source, "export")
+        if export["tanh"] != "default":
+            from nnik.activations import VARIANTS
+
+            if export["tanh"] not in VARIANTS:
+                raise NnikError(f"unknown tanh variant; choose one of default, {', '.join(VARIANTS)}", source, "[export] tanh")
         return cls(
             name=top["name"],
             source=source,
@@ -133,6 +147,7 @@ class Scenario:
             dataset=dataset,
             network=network,
             training=training,
+            export=export,
         )
 
 

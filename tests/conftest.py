@@ -37,3 +37,27 @@ def write_toml(tmp_path: Path, text: str, name: str = "s.toml") -> Path:
     p = tmp_path / name
     p.write_text(text)
     return p
+
+
+def require_tool(tool: str) -> None:
+    """Skip when a toolchain binary is missing, unless NNIK_REQUIRE_TOOLCHAINS=1 (CI), where it fails."""
+    import os
+    import shutil
+
+    if shutil.which(tool) is None:
+        if os.environ.get("NNIK_REQUIRE_TOOLCHAINS") == "1":
+            pytest.fail(f"{tool} not found but NNIK_REQUIRE_TOOLCHAINS=1")
+        pytest.skip(f"{tool} not installed (run `make toolchains`)")
+
+
+@pytest.fixture(scope="session")
+def galvo_fixed(galvo_run) -> dict:
+    """galvo_cba2012 exported to C and verified on the host; returns metrics.json."""
+    pipeline.verify(galvo_run, "host")
+    return pipeline.load_metrics(galvo_run)
+
+
+@pytest.fixture(scope="session")
+def corexy_fixed(corexy_run) -> dict:
+    pipeline.verify(corexy_run, "host")
+    return pipeline.load_metrics(corexy_run)

@@ -1,0 +1,66 @@
+"""C generation: render the integer model into NAME.h / NAME.c (C99, no float, no malloc)."""
+
+from __future__ import annotations
+
+import shutil
+from pathlib import Path
+
+import jinja2
+import numpy as np
+
+from nnik import activations
+from nnik.fixedpoint import ACT_FRAC, IntegerModel
+
+CODEGEN = Path(__file__).resolve().parent.parent / "codegen"
+TEMPLATES = CODEGEN / "templates"
+RUNTIME = CODEGEN / "runtime"
+
+
+def c_list(values, per_line: int = 10, suffix: str = "") -> str:
+    vals = [f"{int(v)}{suffix}" for v in np.asarray(values).ravel()]
+    rows = [", ".join(vals[i:i + per_line]) for i in range(0, len(vals), per_line)]
+    return ",\n".join("    " + r for r in rows)
+
+
+def environment() -> jinja2.Environment:
+    return jinja2.Environment(
+        loader=jinja2.FileSystemLoader(str(TEMPLATES)),
+        undefined=jinja2.StrictUndefined,
+        trim_blocks=True,
+        lstrip_blocks=True,
+        keep_trailing_newline=True,
+    )
+
+
+def render_model_c(im: IntegerModel, scenario_source: str) -> dict[str, str]:
+    """{filename: text} for NAME.h and NAME.c."""
+    o = im.out
+    ctx = dict(
+        name=im.name, NAME=im.name.upper(), scenario=scenario_source, model_hash=im.model_hash(),
+        shape=im.shape, n_in=im.shape[0], n_out=im.shape[-1], unit=im.unit, outputs=im.outputs,
+        lo=im.inp.lo.tolist(), hi=im.inp.hi.tolist(), mid=im.inp.mid.tolist(),
+        K=im.inp.K.tolist(), M=im.inp.M.tolist(), S=im.inp.S.tolist(),
+        hidden=im.hidden, widest=max(max(im.shape[1:-1]), im.shape[0]),
+        V=o.V, g=o.g, F=o.F, e=ACT_FRAC + o.g - o.F, C=o.C.tolist(), residual=o.residual,
+        A1=o.A1.tolist(), A0=o.A0.tolist(), P=o.P.tolist(), G=o.G.tolist(), code_range=o.code_range,
+        weight_bits=im.weight_bits,
+        wtype="int16_t" if im.weight_bits == 16 else "int8_t",
+        rd="NNIK_RD_I16" if im.weight_bits == 16 else "(int8_t)NNIK_RD_U8",
+        tanh_c=activations.render_tanh_c(im.tanh_variant, prefix=im.name),
+        c_list=c_list,
+    )
+    env = environment()
+    return {f"{im.name}.h": env.get_template("model.h.j2").render(**ctx),
+            f"{im.name}.c": env.get_template("model.c.j2").render(**ctx)}
+
+
+def write_sources(files: dict[str, str], outdir: Path) -> list[Path]:
+    """Write generated files plus the runtime header they include; returns the paths."""
+    outdir.mkdir(parents=True, exist_ok=True)
+    paths = []
+    for fname, text in files.items():
+        p = outdir / fname
+        p.write_text(text)
+        paths.append(p)
+    shutil.copy(RUNTIME / "nnik_flash.h", outdir / "nnik_flash.h")
+    return paths

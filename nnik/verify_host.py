@@ -1,0 +1,78 @@
+"""Host verification: compile the generated C with sanitizers and compare it with the integer model."""
+
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+from nnik.errors import NnikError
+from nnik.export import CODEGEN
+from nnik.fixedpoint import IntegerModel
+
+HOST_FLAGS = ["-std=c99", "-pedantic", "-Wall", "-Wextra", "-Werror", "-O1",
+              "-fsanitize=undefined,address", "-fno-sanitize-recover=all"]
+
+
+def verification_inputs(im: IntegerModel, p_test_mm: np.ndarray, n_random: int = 100_000, seed: int = 0) -> dict:
+    """Named input sets in um: the test set, random in-domain points, corners/edges, out of domain."""
+    lo, hi = im.inp.lo, im.inp.hi
+    rng = np.random.default_rng(seed)
+    corners = np.array([[lo[0], lo[1]], [lo[0], hi[1]], [hi[0], lo[1]], [hi[0], hi[1]]], dtype=np.int64)
+    span = hi - lo
+    outside = np.concatenate([
+        corners + np.array([[-1, -1], [-1, 1], [1, -1], [1, 1]]),
+        corners + np.array([[-1, -1], [-1, 1], [1, -1], [1, 1]]) * span,
+        rng.integers(lo - span, hi + span + 1, (2000, 2)),
+        np.array([[-(2**31), -(2**31)], [2**31 - 1, 2**31 - 1], [-(2**31), 2**31 - 1]], dtype=np.int64),
+    ])
+    outside = outside[np.any((outside < lo) | (outside > hi), axis=1)]
+    return {
+        "test": np.rint(p_test_mm * 1000).astype(np.int64),
+        "random": rng.integers(lo, hi + 1, (n_random, 2)),
+        "corners": corners,
+        "outside": outside,
+    }
+
+
+def run_host(c_dir: Path, name: str, in_um: np.ndarray, cc: str = "gcc") -> dict:
+    """Compile NAME.c (instrumented, sanitized) with the check driver and run it on in_um."""
+    if shutil.which(cc) is None:
+        raise NnikError(f"host C compiler {cc!r} not found")
+    with tempfile.TemporaryDirectory() as tmp:
+        exe = Path(tmp) / "check"
+        cmd = [cc, *HOST_FLAGS, "-DNNIK_INSTRUMENT", f"-DNNIK_MODEL={name}", f'-DNNIK_MODEL_HEADER="{name}.h"',
+               "-I", str(c_dir), str(CODEGEN / "harness" / "host" / "mlp_check.c"), str(c_dir / f"{name}.c"),
+               "-o", str(exe)]
+        r = subprocess.run(cmd, capture_output=True, text=True)
+        if r.returncode != 0:
+            raise NnikError(f"host build of {name}.c failed: {r.stderr.strip().splitlines()[0] if r.stderr else ''}")
+        stdin = "\n".join(f"{a} {b}" for a, b in in_um.tolist()) + "\n"
+        env = dict(os.environ, ASAN_OPTIONS="detect_leaks=0")
+        run = subprocess.run([str(exe)], input=stdin, capture_output=True, text=True, env=env)
+    if run.returncode != 0:
+        raise NnikError(f"host run of {name}.c failed: {run.stderr.strip()[:300]}")
+    lines = run.stdout.strip().splitlines()
+    tail = lines[-1].split()
+    rows = np.array([ln.split() for ln in lines[:-1]], dtype=np.int64).reshape(-1, 5)
+    return {"out": rows[:, 0:2], "flags": rows[:, 2], "total": rows[:, 3:5],
+            "overflows": int(tail[1]), "saturations": int(tail[3])}
+
+
+def verify_host(im: IntegerModel, c_dir: Path, inputs: dict) -> dict:
+    """Compare C and the integer model on every input set; counts mismatches and instrumented events."""
+    summary = {"points": 0, "mismatches": 0, "overflows": {}, "saturations": {}}
+    for label, pts in inputs.items():
+        c = run_host(c_dir, im.name, pts)
+        total, out, flags = im.run(pts)
+        bad = np.any(c["out"] != out, axis=1) | (c["flags"] != flags) | np.any(c["total"] != total, axis=1)
+        summary["points"] += int(len(pts))
+        summary["mismatches"] += int(bad.sum())
+        summary["overflows"][label] = c["overflows"]
+        summary["saturations"][label] = c["saturations"]
+    summary["bit_exact"] = summary["mismatches"] == 0
+    return summary

@@ -1,0 +1,81 @@
+"""The generated C: compiles cleanly everywhere and matches the integer model bit for bit."""
+
+from __future__ import annotations
+
+import subprocess
+
+import numpy as np
+import pytest
+
+from nnik import fixedpoint as fx
+from nnik.data import Dataset
+from nnik.export import render_model_c, write_sources
+from nnik.train import TrainedModel
+from nnik.verify_host import run_host, verification_inputs, verify_host
+from tests.conftest import require_tool
+
+
+def test_host_bit_exact_galvo(galvo_fixed):
+    h = galvo_fixed["host"]
+    assert h["bit_exact"] and h["mismatches"] == 0
+    assert h["points"] >= 100_000
+    assert all(v == 0 for v in h["overflows"].values())
+    assert all(v == 0 for k, v in h["saturations"].items() if k != "outside")
+
+
+def test_host_bit_exact_corexy_residual(corexy_fixed):
+    h = corexy_fixed["host"]
+    assert h["bit_exact"] and h["mismatches"] == 0 and h["points"] >= 100_000
+    assert all(v == 0 for v in h["overflows"].values())
+
+
+def test_header_contract(galvo_fixed, galvo_run):
+    h = (galvo_run / "c" / "galvo_cba2012.h").read_text()
+    for needle in ("#define GALVO_CBA2012_N_IN  2", "#define GALVO_CBA2012_N_OUT 2",
+                   "int8_t galvo_cba2012_ik(const int32_t in_um[GALVO_CBA2012_N_IN], int32_t out[GALVO_CBA2012_N_OUT]);",
+                   "GALVO_CBA2012_IN0_MIN_UM (-100000L)", "GALVO_CBA2012_IN1_MAX_UM (100000L)",
+                   galvo_fixed["fixed"]["model_hash"], '"2-6-2"', '"microstep"', "#ifndef GALVO_CBA2012_H"):
+        assert needle in h, needle
+    c = (galvo_run / "c" / "galvo_cba2012.c").read_text()
+    for banned in ("float", "double", "malloc", "int64_t a", "#include <math.h>"):
+        assert banned not in c.split("#ifdef NNIK_INSTRUMENT")[0] or banned == "int64_t a", banned
+    assert "NNIK_FLASH" in c
+
+
+def test_a_corrupted_table_is_caught(galvo_fixed, galvo_run, tmp_path):
+    """The check can fail: change one weight in the C and the comparison must see it."""
+    model = TrainedModel.load(galvo_run / "model.pt")
+    ds = Dataset.load(galvo_run / "data.npz")
+    im = fx.quantize(model, calib=fx.calibration_set(model, ds.p["train"], ds.q["train"]))
+    files = render_model_c(im, "test")
+    w = im.hidden[0].W.ravel()
+    src = files["galvo_cba2012.c"]
+    first_row = ", ".join(str(int(v)) for v in w[:2])
+    assert first_row in src
+    files["galvo_cba2012.c"] = src.replace(first_row, ", ".join([str(int(w[0]) + 1)] + [str(int(v)) for v in w[1:2]]), 1)
+    write_sources(files, tmp_path)
+    res = verify_host(im, tmp_path, {"test": verification_inputs(im, ds.p["test"][:3000])["test"]})
+    assert res["mismatches"] > 0
+
+
+def test_int8_build_is_bit_exact(galvo_run, tmp_path):
+    model = TrainedModel.load(galvo_run / "model.pt")
+    im = fx.quantize(model, weight_bits=8)
+    write_sources(render_model_c(im, "test"), tmp_path)
+    pts = np.random.default_rng(5).integers(im.inp.lo - 1000, im.inp.hi + 1000, (5000, 2))
+    c = run_host(tmp_path, im.name, pts)
+    total, out, flags = im.run(pts)
+    np.testing.assert_array_equal(c["out"], out)
+    np.testing.assert_array_equal(c["total"], total)
+    np.testing.assert_array_equal(c["flags"], flags)
+    assert "int8_t" in (tmp_path / "galvo_cba2012.c").read_text()
+
+
+@pytest.mark.parametrize("opt", ["-Os", "-O2"])
+def test_compiles_warning_free_with_avr_gcc(galvo_fixed, corexy_fixed, galvo_run, corexy_run, tmp_path, opt):
+    require_tool("avr-gcc")
+    for run, name in ((galvo_run, "galvo_cba2012"), (corexy_run, "corexy_nonlinear")):
+        r = subprocess.run(["avr-gcc", "-mmcu=atmega328p", opt, "-std=c99", "-Wall", "-Wextra", "-Werror", "-c",
+                            str(run / "c" / f"{name}.c"), "-I", str(run / "c"), "-o", str(tmp_path / f"{name}.o")],
+                           capture_output=True, text=True)
+        assert r.returncode == 0, r.stderr

@@ -1,0 +1,117 @@
+"""Quantisation and the Python integer model (the oracle every C build is compared with)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import torch
+
+from nnik import fixedpoint as fx
+from nnik.data import Dataset
+from nnik.domain import round_half_up_shift
+from nnik.errors import NnikError
+from nnik.train import TrainedModel
+
+
+def test_rounding_shift_is_c_semantics_on_negatives():
+    v = np.array([-5, -4, -3, -2, -1, 0, 1, 2, 3, 5], dtype=np.int64)
+    # C: (v + 1) >> 1 with arithmetic shift = floor((v + 1) / 2)
+    np.testing.assert_array_equal(round_half_up_shift(v, 1), np.floor((v + 1) / 2).astype(np.int64))
+    np.testing.assert_array_equal(fx.round_half_up_shift_vec(np.array([[-7, 9]]), np.array([0, 2])), [[-7, 2]])
+
+
+@pytest.fixture(scope="module")
+def galvo_model(galvo_run):
+    return TrainedModel.load(galvo_run / "model.pt"), Dataset.load(galvo_run / "data.npz")
+
+
+def test_galvo_fixed_error_bounds(galvo_fixed):
+    f = galvo_fixed["fixed"]
+    assert max(f["max_abs"]) <= 0.5, f["max_abs"]  # pre-rounding: never more than 1 microstep from exact
+    assert max(f["delivered_max_abs"]) <= 1.0, f["delivered_max_abs"]
+    # fixed point may not be much worse than float: goal fixed <= float + 0.1
+    assert max(f["max_abs"]) <= max(galvo_fixed["float"]["max_abs"]) + 0.1
+
+
+def test_corexy_residual_fixed_error_bounds(corexy_fixed):
+    f = corexy_fixed["fixed"]
+    assert max(f["max_abs"]) <= 0.5, f["max_abs"]
+    assert max(f["delivered_max_abs"]) <= 1.0, f["delivered_max_abs"]
+    assert f["q_formats"]["output"]["affine_G"][0][0] > 0  # the affine base is computed in integers
+
+
+def test_range_proof_holds_on_dense_sample(galvo_fixed, corexy_fixed):
+    for m in (galvo_fixed, corexy_fixed):
+        ranges = m["fixed"]["ranges"]
+        assert all(r["within_bound"] for r in ranges)
+        accs = [r for r in ranges if r["tensor"].startswith(("acc", "total"))]
+        assert all(r["bound"] < 2**31 for r in accs)
+        assert all(r["headroom_bits"] >= 1.0 for r in accs)
+
+
+def test_input_stage_never_reaches_2_15(galvo_model):
+    model, _ = galvo_model
+    im = fx.quantize(model)
+    lo, hi = im.inp.lo, im.inp.hi
+    corners = np.array([[lo[0], lo[1]], [hi[0], hi[1]], [lo[0], hi[1]]])
+    trace = {}
+    im.run(corners, trace)
+    assert max(abs(trace["X"][0]), abs(trace["X"][1])) <= 32767
+    assert trace["X"][1] >= 32700  # and uses the range
+
+
+def test_clamping_flags_and_no_extrapolation(galvo_model):
+    model, _ = galvo_model
+    im = fx.quantize(model)
+    lo, hi = im.inp.lo, im.inp.hi
+    pts = np.array([[hi[0], hi[1]], [hi[0] + 5000, hi[1] + 99999], [lo[0], 0], [lo[0] - 1, 0]])
+    _, out, flags = im.run(pts)
+    np.testing.assert_array_equal(flags, [0, 1, 0, 1])
+    np.testing.assert_array_equal(out[0], out[1])  # clamped, not extrapolated
+    np.testing.assert_array_equal(out[2], out[3])
+
+
+def test_refit_does_not_hurt(galvo_model):
+    model, ds = galvo_model
+    calib = fx.calibration_set(model, ds.p["train"], ds.q["train"])
+    in_um = np.rint(ds.p["test"] * 1000).astype(np.int64)
+    from nnik.data import exact_targets
+
+    truth = exact_targets(model.scenario, in_um / 1000)
+    err = {}
+    for refit in (False, True):
+        im = fx.quantize(model, refit=refit, calib=calib)
+        err[refit] = np.abs(im.pre_rounding(in_um) - truth).max()
+    assert err[True] <= err[False] + 1e-9, err
+
+
+def test_weight_overflow_is_a_clear_error(galvo_model):
+    model, _ = galvo_model
+    with torch.no_grad():
+        w = model.net.net[0].weight
+        saved = w.clone()
+        w[0, 0] = 1e6
+        try:
+            with pytest.raises(NnikError, match="hidden layer 1: weights? .*(too large|overflows)"):
+                fx.quantize(model)
+        finally:
+            w.copy_(saved)
+
+
+def test_no_normalize_model_is_refused(galvo_model):
+    model, _ = galvo_model
+    model.normalize = False
+    try:
+        with pytest.raises(NnikError, match="normalised"):
+            fx.quantize(model)
+    finally:
+        model.normalize = True
+
+
+def test_int8_weights_option(galvo_model):
+    model, ds = galvo_model
+    im16 = fx.quantize(model, weight_bits=16)
+    im8 = fx.quantize(model, weight_bits=8)
+    assert np.abs(im8.hidden[0].W).max() <= 127 and np.abs(im8.out.V).max() <= 127
+    assert im8.weights_bytes() < im16.weights_bytes()
+    assert im8.model_hash() != im16.model_hash()
