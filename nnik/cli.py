@@ -35,6 +35,14 @@ def print_accuracy(m: dict) -> None:
         rows.append((f"MLP fixed point, pre-rounding", m["fixed"]))
         rows.append(("MLP fixed point, delivered", {"max_abs": m["fixed"]["delivered_max_abs"],
                                                     "rms": m["fixed"]["delivered_rms"]}))
+    b = m.get("baselines", {})
+    if b.get("float", {}).get("max_abs"):
+        rows.append(("baseline: float math.h C, delivered", b["float"]))
+    if b.get("lut"):
+        lut = b["lut"]
+        rows.append((f"baseline: LUT {lut['grid'][0]}x{lut['grid'][1]} ({lut['flash_bytes']} B), pre-rounding",
+                     {"max_abs": lut["pre_max_abs"], "rms": lut["pre_rms"]}))
+        rows.append(("baseline: LUT, delivered", lut))
     for label, s in rows:
         rel = _fmt(s["rel_pct"], 4) if "rel_pct" in s else "-"
         p99 = _fmt(s["p99"], 4) if "p99" in s else "-"

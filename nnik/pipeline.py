@@ -123,6 +123,7 @@ def export(outdir: Path):
     write_sources(render_model_c(im, scn.source), outdir / C_DIR)
     in_um = np.rint(ds.p["test"] * 1000).astype(np.int64)
     truth = _truth_for_um(scn, in_um, ds.q["test"])
+    baselines = _export_baselines(scn, im, ds, outdir / C_DIR, in_um, truth)
     total, delivered, _ = im.run(in_um)
     pre = total / float(2**im.out.F)
     stats = error_stats(pre, truth)
@@ -139,10 +140,63 @@ def export(outdir: Path):
                   "weights_bytes": im.weights_bytes(), "model_hash": im.model_hash(),
                   "q_formats": im.formats(), "ranges": ranges},
         "tanh": {"variant": im.tanh_variant, **{k: tanh_stats[k] for k in ("max_lsb", "rms_lsb") if k in tanh_stats}},
+        "baselines": baselines,
     })
     np.savez_compressed(outdir / FIXED_EVAL_FILE, p_test=ds.p["test"], q_true=truth, q_float=model.predict(ds.p["test"]),
                         q_fixed=pre, q_delivered=delivered)
     return im
+
+
+def mlp_flash_bytes(im) -> int:
+    """Bytes of constant tables the MLP needs: weights, biases and the tanh table."""
+    from nnik import activations
+
+    return im.weights_bytes() + activations.get_variant(im.tanh_variant).coeff_bytes
+
+
+def _export_baselines(scn, im, ds, c_dir: Path, in_um: np.ndarray, truth: np.ndarray) -> dict:
+    """Write NAME_float.{h,c} (where a closed form exists) and NAME_lut.{h,c}; their accuracy."""
+    from nnik import baselines as bl
+    from nnik.export import write_sources
+
+    out: dict = {}
+    reason = bl.float_unavailable_reason(scn)
+    if reason is None:
+        write_sources(bl.render_float_c(scn), c_dir)
+        out["float"] = {"available": True, "file": f"{scn.name}_float.c"}
+    else:
+        out["float"] = {"available": False, "reason": reason}
+    budget = scn.export["lut_bytes"] or mlp_flash_bytes(im)
+    lut = bl.build_lut(scn, budget, ds.p["train"], ds.q["train"])
+    write_sources(bl.render_lut_c(lut), c_dir)
+    acc = bl.lut_accuracy(lut, in_um, truth)
+    out["lut"] = {"available": True, "file": f"{scn.name}_lut.c", "budget_bytes": int(budget),
+                  "flash_bytes": int(lut.flash_bytes), "grid": acc["grid"], "origin": lut.origin,
+                  **acc["out"], "pre_max_abs": acc["pre"]["max_abs"], "pre_rms": acc["pre"]["rms"]}
+    return out
+
+
+def _verify_baselines_host(outdir: Path, bmetrics: dict, ds: Dataset, inputs: dict) -> dict:
+    """Run the baselines' C on the host: the LUT must match its integer model bit for bit; the
+    float IK's delivered error is measured against the exact IK (libm is not bit-reproducible)."""
+    from nnik import baselines as bl
+    from nnik.verify_host import run_host_driver
+
+    model = TrainedModel.load(outdir / MODEL_FILE)
+    scn = model.scenario
+    c_dir = outdir / C_DIR
+    pts = np.concatenate(list(inputs.values()))
+    lut = bl.build_lut(scn, bmetrics["lut"]["budget_bytes"], ds.p["train"], ds.q["train"])
+    c = run_host_driver(c_dir, f"{scn.name}_lut", pts)
+    out, flags, _ = bl.lut_int(lut, pts)
+    bad = np.any(c["out"] != out, axis=1) | (c["flags"] != flags)
+    bmetrics["lut"]["host"] = {"points": int(len(pts)), "mismatches": int(bad.sum()), "bit_exact": bool(not bad.any())}
+    if bmetrics["float"]["available"]:
+        test_um = inputs["test"]
+        c = run_host_driver(c_dir, f"{scn.name}_float", test_um, libs=("-lm",))
+        truth = _truth_for_um(scn, test_um, ds.q["test"])
+        bmetrics["float"].update(error_stats(c["out"], truth))
+    return bmetrics
 
 
 def verify(outdir: Path, target: str = "host"):
@@ -152,8 +206,12 @@ def verify(outdir: Path, target: str = "host"):
     im = export(outdir)  # deterministic: regenerates the same C and integer model
     ds = Dataset.load(outdir / DATA_FILE)
     if target == "host":
-        res = verify_host(im, outdir / C_DIR, verification_inputs(im, ds.p["test"]))
-        write_metrics(outdir, {"host": res})
+        inputs = verification_inputs(im, ds.p["test"])
+        res = verify_host(im, outdir / C_DIR, inputs)
+        metrics = load_metrics(outdir)
+        metrics["host"] = res
+        metrics["baselines"] = _verify_baselines_host(outdir, metrics["baselines"], ds, inputs)
+        write_metrics(outdir, metrics, merge=False)
         return res
     raise NnikError(f"unknown target {target!r} (host, avr, pic18)")
 

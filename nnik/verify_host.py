@@ -76,3 +76,21 @@ def verify_host(im: IntegerModel, c_dir: Path, inputs: dict) -> dict:
         summary["saturations"][label] = c["saturations"]
     summary["bit_exact"] = summary["mismatches"] == 0
     return summary
+
+
+def run_host_driver(c_dir: Path, prefix: str, in_um: np.ndarray, libs: tuple[str, ...] = (), cc: str = "gcc") -> dict:
+    """Build PREFIX.c with the generic driver (codegen/harness/host/ik_driver.c), run it on in_um."""
+    with tempfile.TemporaryDirectory() as tmp:
+        exe = Path(tmp) / "drv"
+        cmd = [cc, *HOST_FLAGS, f"-DIK_FN={prefix}_ik", f'-DIK_HEADER="{prefix}.h"', "-I", str(c_dir),
+               str(CODEGEN / "harness" / "host" / "ik_driver.c"), str(c_dir / f"{prefix}.c"), "-o", str(exe), *libs]
+        r = subprocess.run(cmd, capture_output=True, text=True)
+        if r.returncode != 0:
+            raise NnikError(f"host build of {prefix}.c failed: {r.stderr.strip()[:300]}")
+        stdin = "\n".join(f"{a} {b}" for a, b in in_um.tolist()) + "\n"
+        env = dict(os.environ, ASAN_OPTIONS="detect_leaks=0")
+        run = subprocess.run([str(exe)], input=stdin, capture_output=True, text=True, env=env)
+    if run.returncode != 0:
+        raise NnikError(f"host run of {prefix}.c failed: {run.stderr.strip()[:300]}")
+    rows = np.array(run.stdout.split(), dtype=np.int64).reshape(-1, 3)
+    return {"out": rows[:, :2], "flags": rows[:, 2]}

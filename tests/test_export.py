@@ -79,3 +79,14 @@ def test_compiles_warning_free_with_avr_gcc(galvo_fixed, corexy_fixed, galvo_run
                             str(run / "c" / f"{name}.c"), "-I", str(run / "c"), "-o", str(tmp_path / f"{name}.o")],
                            capture_output=True, text=True)
         assert r.returncode == 0, r.stderr
+
+
+def test_baselines_exported_and_checked(galvo_fixed, corexy_fixed):
+    g = galvo_fixed["baselines"]
+    assert g["float"]["available"] and max(g["float"]["max_abs"]) <= 0.51  # libm float32 + rounding
+    for m in (galvo_fixed, corexy_fixed):
+        lut = m["baselines"]["lut"]
+        assert lut["host"]["bit_exact"] and lut["host"]["mismatches"] == 0
+        assert lut["flash_bytes"] <= lut["budget_bytes"]
+    c = corexy_fixed["baselines"]
+    assert not c["float"]["available"] and "closed-form" in c["float"]["reason"].replace("closed form", "closed-form")
