@@ -83,6 +83,13 @@ def cmd_run(args) -> None:
         pipeline.export(out)
         console.print(f"exported C to {out / pipeline.C_DIR}/; verifying on the host ...")
         pipeline.verify(out, "host")
+        for target in ("avr", "pic18"):
+            res = pipeline.verify(out, target)
+            if "not_run" in res:
+                console.print(f"{target}: not run ({res['not_run']})")
+            else:
+                console.print(f"{target}: {res['cycles']:.0f} cycles/IK ({res['us']:.0f} us at 16 MHz), "
+                              f"{res['flash_bytes']} B flash, {res['mismatches']} mismatches on {res['points']} vectors")
         m = pipeline.load_metrics(out)
     print_accuracy(m)
     console.print(f"done in {time.perf_counter() - t0:.1f} s; metrics: {out / pipeline.METRICS_FILE}")

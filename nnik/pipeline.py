@@ -213,5 +213,90 @@ def verify(outdir: Path, target: str = "host"):
         metrics["baselines"] = _verify_baselines_host(outdir, metrics["baselines"], ds, inputs)
         write_metrics(outdir, metrics, merge=False)
         return res
+    if target in TARGET_OPTS:
+        return verify_target(outdir, target)
     raise NnikError(f"unknown target {target!r} (host, avr, pic18)")
 
+
+
+# ---- simulated targets ------------------------------------------------------------------------
+TARGET_OPTS = {"avr": ("-Os", "-O2"), "pic18": ("",)}
+
+
+def target_vectors(im, p_test_mm: np.ndarray, n_test: int = 200) -> np.ndarray:
+    """A few hundred vectors: test points, the domain's corners and edges, out-of-domain points."""
+    lo, hi = im.inp.lo, im.inp.hi
+    corners = np.array([[lo[0], lo[1]], [lo[0], hi[1]], [hi[0], lo[1]], [hi[0], hi[1]]], dtype=np.int64)
+    mid = (lo + hi) // 2
+    edges = np.array([[mid[0], lo[1]], [mid[0], hi[1]], [lo[0], mid[1]], [hi[0], mid[1]], mid], dtype=np.int64)
+    span = hi - lo
+    outside = np.array([[lo[0] - 1, mid[1]], [hi[0] + 1, mid[1]], [mid[0], lo[1] - span[1]], [mid[0], hi[1] + span[1]],
+                        [lo[0] - span[0], lo[1] - span[1]], [hi[0] + span[0], hi[1] + span[1]],
+                        [-(2**31), 2**31 - 1], [2**31 - 1, -(2**31)]], dtype=np.int64)
+    test = np.rint(p_test_mm[:n_test] * 1000).astype(np.int64)
+    return np.concatenate([test, corners, edges, outside])
+
+
+def _target_row(res: dict, truth_in: np.ndarray | None, out: np.ndarray, inside: np.ndarray) -> dict:
+    row = {"cycles": float(res["cycles_mean"]), "cycles_max": int(res["cycles_max"]),
+           "flash_bytes": int(res["model_flash_bytes"]), "ram_bytes": int(res["model_ram_bytes"]),
+           "program_flash_bytes": int(res["flash_bytes"]), "program_ram_bytes": int(res["ram_bytes"]),
+           "compiler": res["compiler"], "flags": res["compiler_flags"], "us": float(res["us_mean"])}
+    if truth_in is not None:
+        row["max_abs"] = np.abs(out[inside] - truth_in).max(0).tolist()
+    return row
+
+
+def verify_target(outdir: Path, target: str) -> dict:
+    """Run the MLP (each compiler setting), the float IK and the LUT in the same harness."""
+    from nnik import baselines as bl
+    from nnik.targets import TargetError, available, run_on_target
+
+    ok, reason = available(target)
+    if not ok:
+        res = {"not_run": reason}
+        write_metrics(outdir, {"targets": {**load_metrics(outdir).get("targets", {}), target: res}})
+        return res
+    im = export(outdir)
+    ds = Dataset.load(outdir / DATA_FILE)
+    metrics = load_metrics(outdir)
+    scn = TrainedModel.load(outdir / MODEL_FILE).scenario
+    c_dir = outdir / C_DIR
+    vec = target_vectors(im, ds.p["test"])
+    inside = np.all((vec >= im.inp.lo) & (vec <= im.inp.hi), axis=1)
+    n_in = int(inside.sum())
+    truth = _truth_for_um(scn, vec[inside], ds.q["test"][:n_in]) if scn.mechanism.analytic else None
+    _, want, want_flags = im.run(vec)
+
+    def run(prefix, opt):
+        try:
+            return run_on_target(target=target, sources=[c_dir / f"{prefix}.c"], include_dirs=[c_dir], name=prefix,
+                                 vectors=vec, opt=opt or "-Os",
+                                 workdir=(outdir / "targets" / target / (prefix + opt)).resolve())
+        except TargetError as exc:
+            raise NnikError(f"{target}: {exc}") from None
+
+    kernels, mismatches = {}, 0
+    for opt in TARGET_OPTS[target]:
+        r = run(scn.name, opt)
+        bad = np.any(r["outputs"] != want, axis=1) | (r["flags"] != want_flags)
+        mismatches += int(bad.sum())
+        kernels[f"mlp {opt}".strip()] = {**_target_row(r, truth, r["outputs"], inside), "mismatches": int(bad.sum())}
+    main = kernels[min(kernels, key=lambda k: kernels[k]["cycles"])]
+    base = {}
+    if metrics["baselines"]["float"]["available"]:
+        r = run(f"{scn.name}_float", TARGET_OPTS[target][0])
+        base["float"] = _target_row(r, truth, r["outputs"], inside)
+    else:
+        base["float"] = {"not_run": metrics["baselines"]["float"]["reason"]}
+    lut = bl.build_lut(scn, metrics["baselines"]["lut"]["budget_bytes"], ds.p["train"], ds.q["train"])
+    r = run(f"{scn.name}_lut", TARGET_OPTS[target][0])
+    lut_out, lut_flags, _ = bl.lut_int(lut, vec)
+    lut_bad = int((np.any(r["outputs"] != lut_out, axis=1) | (r["flags"] != lut_flags)).sum())
+    base["lut"] = {**_target_row(r, truth, r["outputs"], inside), "mismatches": lut_bad}
+    res = {**main, "bit_exact": mismatches == 0 and lut_bad == 0, "mismatches": mismatches, "points": int(len(vec)),
+           "clock_hz": 16_000_000, "kernels": kernels, "baselines": base}
+    if "cycles" in base["float"]:
+        res["speedup_vs_float"] = base["float"]["cycles"] / main["cycles"]
+    write_metrics(outdir, {"targets": {**metrics.get("targets", {}), target: res}})
+    return res
