@@ -13,8 +13,11 @@ $(STAMP): pyproject.toml
 
 setup: $(STAMP)
 
+# avr-gcc + simavr, SDCC pic16 (built from Debian's source) + gputils + gpsim, and Chromium
+# (the report check); idempotent, under /opt/nnik-toolchains (NNIK_TOOLCHAIN_PREFIX)
 toolchains:
 	bash scripts/install_toolchains.sh
+	bash scripts/install_chromium.sh
 
 demo: setup
 	$(PYTHON) -m nnik run $(SCENARIO)
