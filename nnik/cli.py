@@ -92,6 +92,7 @@ def cmd_run(args) -> None:
                               f"{res['flash_bytes']} B flash, {res['mismatches']} mismatches on {res['points']} vectors")
         m = pipeline.load_metrics(out)
     print_accuracy(m)
+    print_report(out)
     console.print(f"done in {time.perf_counter() - t0:.1f} s; metrics: {out / pipeline.METRICS_FILE}")
 
 
@@ -154,6 +155,22 @@ def cmd_tanh(args) -> None:
                   f"coefficients give RMS {rep['printed_rms_0_6']:.4e} on [0, 6] (published: {rep['published_rms']:.4e})")
 
 
+def print_report(model_dir: Path, out_dir: Path | None = None) -> None:
+    from nnik.report import SUMMARY_HEADER, load_metrics, summary_rows, write_report
+
+    index = write_report(model_dir, out_dir)
+    t = Table(title=f"report: {index}")
+    for h in SUMMARY_HEADER:
+        t.add_column(h)
+    for r in summary_rows(load_metrics(model_dir)):
+        t.add_row(*r)
+    console.print(t)
+
+
+def cmd_report(args) -> None:
+    print_report(Path(args.model_dir), Path(args.outdir) if args.outdir else None)
+
+
 def cmd_synth_csv(args) -> None:
     from nnik.scenario import load_scenario
     from nnik.synth import synthesize_measurements
@@ -188,6 +205,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("model_dir")
     p.add_argument("--target", default="host", choices=("host", "avr", "pic18"))
     p.set_defaults(func=cmd_verify)
+    p = sub.add_parser("report", help="write the HTML/Markdown accuracy and latency report")
+    p.add_argument("model_dir")
+    p.add_argument("-o", "--outdir", help="report directory (default MODEL_DIR/report)")
+    p.set_defaults(func=cmd_report)
     p = sub.add_parser("tanh", help="table of the tanh replacements and their measured errors")
     p.set_defaults(func=cmd_tanh)
     p = sub.add_parser("synth-csv", help="write a calibration CSV measured on a simulated machine")
