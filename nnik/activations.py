@@ -131,12 +131,13 @@ class Variant:
     nseg: int
     degree: int
     continuous: bool
-    # float pieces: (x_lo, x_hi, x0, coeffs ascending in t = x - x0); lerp: nodes (x, y)
+    # float pieces: (x_lo, x_hi, x0, coeffs ascending in t = x - x0); for a table, one
+    # linear piece per node interval (the float nodes are also in float_nodes)
     pieces: list = field(default_factory=list)
     # ---- integer realisation ----
-    # poly: segments[j] = dict(a_lo, a_hi, org, s); coef[j] = Horner order c_d..c_0 (int16);
-    #       q[j] = Q formats of c_d..c_0; sh[j] = shift of each of the d Horner steps
-    # lerp: regions[r] = dict(a_lo, a_hi, k, off); table = int16 nodes
+    # poly: segments[j] = dict(a_lo, a_hi, org, s, ...); coef[j] = Horner order c_d..c_0
+    #       (int16); q[j] = Q formats of c_d..c_0; sh[j] = shift of each of the d steps
+    # lerp: regions[r] = dict(a_lo, a_hi, k, off, fb, drop, ...); table = int16 Q15 nodes
     index_shift: int | None = None
     segments: list = field(default_factory=list)
     coef: np.ndarray | None = None
@@ -300,7 +301,7 @@ def _degrees(spec: PolySpec, n: int) -> list[int]:
 _LP_POINTS = 256
 
 
-def _fit_poly_float(spec: PolySpec, segs: list[dict], sat_x: float) -> list[np.ndarray]:
+def _fit_poly_float(spec: PolySpec, segs: list[dict]) -> list[np.ndarray]:
     """Coefficients ascending in t = x - x0 for each segment (float64)."""
     degs = _degrees(spec, len(segs))
     # design blocks in tau = t / w (well conditioned), on every Q3.12 point of the segment
@@ -541,6 +542,8 @@ def _quantise_poly(v: Variant, coeffs: list[np.ndarray], uniform_q: bool) -> Non
             sh[:, i] = hi_q + Q_IN + s - lo_q
         if (sh < 1).any():
             raise NnikError(f"{v.name}: cannot build a fixed-point Horner scheme")
+        if (sh > 30).any():  # keeps 2^(sh-1) and p + 2^(sh-1) inside int32
+            raise NnikError(f"{v.name}: a Horner shift exceeds 30")
         coef = np.zeros((nseg, deg + 1), dtype=np.int64)
         for j in range(nseg):
             for i in range(deg + 1):
@@ -567,7 +570,7 @@ def _quantise_poly(v: Variant, coeffs: list[np.ndarray], uniform_q: bool) -> Non
 
 def _build_poly(spec: PolySpec) -> Variant:
     segs, sat_a, sat_x = _poly_segments(spec)
-    coeffs = _fit_poly_float(spec, segs, sat_x)
+    coeffs = _fit_poly_float(spec, segs)
     degs = _degrees(spec, len(segs))
     v = Variant(
         name=spec.name, description=spec.description, kind="poly", method=spec.method,
