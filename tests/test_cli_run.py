@@ -1,0 +1,29 @@
+"""`nnik run` end to end on a small scenario: every stage runs and leaves its artefacts."""
+
+from __future__ import annotations
+
+import json
+
+from nnik.cli import main
+from tests.conftest import DATASETS, write_toml
+
+
+def test_run_end_to_end(tmp_path, capsys):
+    text = (DATASETS / "galvo_cba2012.toml").read_text()
+    text = text.replace("n_train = 1000", "n_train = 300").replace("n_test = 20000", "n_test = 2000")
+    text = text.replace("max_seconds = 60", "max_seconds = 4\nrestarts = 1\nadam_steps = 500")
+    toml = write_toml(tmp_path, text)
+    out = tmp_path / "out"
+    assert main(["run", str(toml), "-o", str(out)]) == 0
+    printed = capsys.readouterr().out
+    for f in ("data.npz", "model.pt", "model.onnx", "metrics.json", "c/galvo_cba2012.c", "c/galvo_cba2012.h",
+              "c/galvo_cba2012_lut.c", "c/galvo_cba2012_float.c", "report/index.html", "report/report.md"):
+        assert (out / f).is_file(), f
+    m = json.loads((out / "metrics.json").read_text())
+    for key in ("name", "outputs", "unit", "float", "train_seconds", "fixed", "host", "baselines", "targets"):
+        assert key in m, key
+    assert m["host"]["mismatches"] == 0
+    for target in ("avr", "pic18"):
+        t = m["targets"][target]
+        assert "not_run" in t or t["mismatches"] == 0
+    assert "MLP fixed point, delivered" in printed and "report:" in printed
