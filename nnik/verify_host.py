@@ -39,24 +39,32 @@ def verification_inputs(im: IntegerModel, p_test_mm: np.ndarray, n_random: int =
     }
 
 
-def run_host(c_dir: Path, name: str, in_um: np.ndarray, cc: str = "gcc") -> dict:
-    """Compile NAME.c (instrumented, sanitized) with the check driver and run it on in_um."""
+def _build_and_run(c_dir: Path, prefix: str, driver: str, defines: list[str], in_um: np.ndarray,
+                   libs: tuple[str, ...] = (), cc: str = "gcc") -> str:
+    """Compile PREFIX.c with a host driver (sanitized), feed it "x y" lines, return its stdout."""
     if shutil.which(cc) is None:
         raise NnikError(f"host C compiler {cc!r} not found")
     with tempfile.TemporaryDirectory() as tmp:
-        exe = Path(tmp) / "check"
-        cmd = [cc, *HOST_FLAGS, "-DNNIK_INSTRUMENT", f"-DNNIK_MODEL={name}", f'-DNNIK_MODEL_HEADER="{name}.h"',
-               "-I", str(c_dir), str(CODEGEN / "harness" / "host" / "mlp_check.c"), str(c_dir / f"{name}.c"),
-               "-o", str(exe)]
+        exe = Path(tmp) / "drv"
+        cmd = [cc, *HOST_FLAGS, *defines, "-I", str(c_dir), str(CODEGEN / "harness" / "host" / driver),
+               str(c_dir / f"{prefix}.c"), "-o", str(exe), *libs]
         r = subprocess.run(cmd, capture_output=True, text=True)
         if r.returncode != 0:
-            raise NnikError(f"host build of {name}.c failed: {r.stderr.strip().splitlines()[0] if r.stderr else ''}")
+            first = r.stderr.strip().splitlines()[0] if r.stderr.strip() else ""
+            raise NnikError(f"host build of {prefix}.c failed: {first}")
         stdin = "\n".join(f"{a} {b}" for a, b in in_um.tolist()) + "\n"
         env = dict(os.environ, ASAN_OPTIONS="detect_leaks=0")
         run = subprocess.run([str(exe)], input=stdin, capture_output=True, text=True, env=env)
     if run.returncode != 0:
-        raise NnikError(f"host run of {name}.c failed: {run.stderr.strip()[:300]}")
-    lines = run.stdout.strip().splitlines()
+        raise NnikError(f"host run of {prefix}.c failed: {run.stderr.strip()[:300]}")
+    return run.stdout
+
+
+def run_host(c_dir: Path, name: str, in_um: np.ndarray, cc: str = "gcc") -> dict:
+    """Run NAME.c instrumented (-DNNIK_INSTRUMENT) with the MLP check driver: outputs, flags,
+    pre-rounding totals and the overflow/saturation counters."""
+    defines = ["-DNNIK_INSTRUMENT", f"-DNNIK_MODEL={name}", f'-DNNIK_MODEL_HEADER="{name}.h"']
+    lines = _build_and_run(c_dir, name, "mlp_check.c", defines, in_um, cc=cc).strip().splitlines()
     tail = lines[-1].split()
     rows = np.array([ln.split() for ln in lines[:-1]], dtype=np.int64).reshape(-1, 5)
     return {"out": rows[:, 0:2], "flags": rows[:, 2], "total": rows[:, 3:5],
@@ -79,18 +87,8 @@ def verify_host(im: IntegerModel, c_dir: Path, inputs: dict) -> dict:
 
 
 def run_host_driver(c_dir: Path, prefix: str, in_um: np.ndarray, libs: tuple[str, ...] = (), cc: str = "gcc") -> dict:
-    """Build PREFIX.c with the generic driver (codegen/harness/host/ik_driver.c), run it on in_um."""
-    with tempfile.TemporaryDirectory() as tmp:
-        exe = Path(tmp) / "drv"
-        cmd = [cc, *HOST_FLAGS, f"-DIK_FN={prefix}_ik", f'-DIK_HEADER="{prefix}.h"', "-I", str(c_dir),
-               str(CODEGEN / "harness" / "host" / "ik_driver.c"), str(c_dir / f"{prefix}.c"), "-o", str(exe), *libs]
-        r = subprocess.run(cmd, capture_output=True, text=True)
-        if r.returncode != 0:
-            raise NnikError(f"host build of {prefix}.c failed: {r.stderr.strip()[:300]}")
-        stdin = "\n".join(f"{a} {b}" for a, b in in_um.tolist()) + "\n"
-        env = dict(os.environ, ASAN_OPTIONS="detect_leaks=0")
-        run = subprocess.run([str(exe)], input=stdin, capture_output=True, text=True, env=env)
-    if run.returncode != 0:
-        raise NnikError(f"host run of {prefix}.c failed: {run.stderr.strip()[:300]}")
-    rows = np.array(run.stdout.split(), dtype=np.int64).reshape(-1, 3)
+    """Run PREFIX.c (any IK with the nnik API, e.g. a baseline) with the generic driver."""
+    defines = [f"-DIK_FN={prefix}_ik", f'-DIK_HEADER="{prefix}.h"']
+    out = _build_and_run(c_dir, prefix, "ik_driver.c", defines, in_um, libs, cc)
+    rows = np.array(out.split(), dtype=np.int64).reshape(-1, 3)
     return {"out": rows[:, :2], "flags": rows[:, 2]}
