@@ -32,7 +32,7 @@ def print_accuracy(m: dict) -> None:
     t.add_column("rel. % (004)", justify="right")
     rows = [("affine least squares", m["affine_only"]), ("MLP float64", m["float"])]
     if "fixed" in m:
-        rows.append((f"MLP fixed point, pre-rounding", m["fixed"]))
+        rows.append(("MLP fixed point, pre-rounding", m["fixed"]))
         rows.append(("MLP fixed point, delivered", {"max_abs": m["fixed"]["delivered_max_abs"],
                                                     "rms": m["fixed"]["delivered_rms"]}))
     b = m.get("baselines", {})

@@ -1088,7 +1088,7 @@ class _Builder:
     # ---- 7. published references -------------------------------------------------------------------
 
     def references(self) -> Section:
-        m, unit = self.m, self.unit
+        m = self.m
         sec = Section("references", "Published references beside this run")
         sec.paragraphs.append("Rows marked “published” are copied from the papers and were not measured here; "
                               "“this run” rows are this model's own measurements. Different chips, compilers and "

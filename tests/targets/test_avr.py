@@ -4,13 +4,13 @@ Skips when the AVR tools are missing, unless NNIK_REQUIRE_TOOLCHAINS=1 (then fai
 """
 from __future__ import annotations
 
-import os
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-from nnik.targets import TargetError, available, run_on_target
+from nnik.targets import TargetError, run_on_target
+from tests.targets.runner_helpers import galvo_reference, need_toolchain, toy_reference, toy_vectors
 
 FIX = Path(__file__).parent / "fixtures"
 TARGET = "avr"
@@ -18,41 +18,11 @@ TARGET = "avr"
 GALVO_REF_CYCLES = 7623
 
 
-def need_toolchain():
-    ok, why = available(TARGET)
-    if not ok:
-        if os.environ.get("NNIK_REQUIRE_TOOLCHAINS") == "1":
-            pytest.fail(f"NNIK_REQUIRE_TOOLCHAINS=1 but {why}")
-        pytest.skip(why)
-
-
-def toy_vectors(n_random: int = 90, seed: int = 1) -> np.ndarray:
-    rng = np.random.default_rng(seed)
-    edge = [[0, 0], [1, -1], [-1, 1], [100000, 100000], [-100000, -100000], [100001, 0],
-            [0, -100001], [2**31 - 1, -(2**31)], [-(2**31), 2**31 - 1], [-7, -3], [-5, 2]]
-    rnd = rng.integers(-150000, 150001, size=(n_random, 2))
-    return np.vstack([np.array(edge, dtype=np.int64), rnd])
-
-
-def toy_reference(vec: np.ndarray):
-    a = np.clip(vec[:, 0], -100000, 100000)
-    b = np.clip(vec[:, 1], -100000, 100000)
-    flags = ((a != vec[:, 0]) | (b != vec[:, 1])).astype(np.int64)
-    out = np.stack([(a * 3 + b) >> 2, a - b], axis=1)  # numpy >> on int64 is arithmetic
-    return out, flags
-
-
-def galvo_reference(vec: np.ndarray) -> np.ndarray:
-    x = np.clip(vec[:, 0], -250000, 250000) / 1000.0
-    y = np.clip(vec[:, 1], -250000, 250000) / 1000.0
-    alpha = 0.5 * np.arctan(y / 300.0)
-    beta = 0.5 * np.arctan2(np.sqrt(y * y + 300.0 ** 2), x)
-    return np.stack([np.round(np.degrees(alpha) / 0.1125), np.round(np.degrees(beta) / 0.1125)], 1)
 
 
 @pytest.fixture(scope="module", params=["-Os", "-O2"])
 def toy_run(request, tmp_path_factory):
-    need_toolchain()
+    need_toolchain(TARGET)
     vec = toy_vectors()
     res = run_on_target(target=TARGET, sources=[FIX / "toy.c"], include_dirs=[FIX], name="toy",
                         vectors=vec, opt=request.param,
@@ -88,7 +58,7 @@ def test_toy_cycles_and_sizes(toy_run):
 
 def test_long_calls_count_timer_overflows(tmp_path):
     """Cycles stay exactly linear across Timer1 overflows (calls > 65535 cycles)."""
-    need_toolchain()
+    need_toolchain(TARGET)
     # equal spacing in multiples of 256 so that data-dependent 16-bit compare/carry paths
     # contribute the same amount per step
     n = np.array([[1024 + 10240 * k, 0] for k in range(5)], dtype=np.int64)
@@ -102,7 +72,7 @@ def test_long_calls_count_timer_overflows(tmp_path):
 
 
 def test_float_galvo_cycles_in_published_ballpark(tmp_path, capsys):
-    need_toolchain()
+    need_toolchain(TARGET)
     rng = np.random.default_rng(3)
     vec = rng.integers(-200000, 200001, size=(24, 2))
     res = run_on_target(target=TARGET, sources=[FIX / "float_galvo.c"], name="galvo",
@@ -118,7 +88,7 @@ def test_float_galvo_cycles_in_published_ballpark(tmp_path, capsys):
 
 
 def test_build_error_raises_target_error(tmp_path):
-    need_toolchain()
+    need_toolchain(TARGET)
     with pytest.raises(TargetError) as ei:
         run_on_target(target=TARGET, sources=[FIX / "broken.c"], name="broken",
                       vectors=np.zeros((1, 2), dtype=np.int64), workdir=tmp_path)
