@@ -9,11 +9,14 @@ import jinja2
 import numpy as np
 
 from nnik import activations
+from nnik import kernel as kern
+from nnik.errors import NnikError
 from nnik.fixedpoint import ACT_FRAC, IntegerModel
 
 CODEGEN = Path(__file__).resolve().parent.parent / "codegen"
 TEMPLATES = CODEGEN / "templates"
 RUNTIME = CODEGEN / "runtime"
+RUNTIME_HEADERS = ("nnik_flash.h", "nnik_kernel.h")  # copied next to every generated file
 
 
 def c_list(values, per_line: int = 10, suffix: str = "") -> str:
@@ -32,8 +35,21 @@ def environment() -> jinja2.Environment:
     )
 
 
-def render_model_c(im: IntegerModel, scenario_source: str) -> dict[str, str]:
-    """{filename: text} for NAME.h and NAME.c."""
+def render_model_c(im: IntegerModel, scenario_source: str, kernel: str | None = None) -> dict[str, str]:
+    """{filename: text} for NAME.h and NAME.c.
+
+    kernel: None (the model's own, ``im.kernel``), "portable" or "fast".  The kernel is part
+    of the integer model (``quantize(..., kernel=...)``): the fast C needs a model quantised
+    for it, and a fast model has no portable-template rendering.
+    """
+    kernel = im.kernel if kernel is None else kern.check_kernel(kernel)
+    if kernel != im.kernel:
+        raise NnikError(f"render_model_c: the model was quantised for kernel {im.kernel!r}, not {kernel!r} "
+                        f"(quantize(..., kernel={kernel!r}))")
+    if kernel == "fast":
+        from nnik import fastc
+
+        return fastc.render(im, scenario_source)
     o = im.out
     ctx = dict(
         name=im.name, NAME=im.name.upper(), scenario=scenario_source, model_hash=im.model_hash(),
@@ -62,5 +78,6 @@ def write_sources(files: dict[str, str], outdir: Path) -> list[Path]:
         p = outdir / fname
         p.write_text(text)
         paths.append(p)
-    shutil.copy(RUNTIME / "nnik_flash.h", outdir / "nnik_flash.h")
+    for header in RUNTIME_HEADERS:
+        shutil.copy(RUNTIME / header, outdir / header)
     return paths

@@ -19,6 +19,16 @@ Formats come from range analysis: interval bound propagation over the whole inpu
 the float ranges; worst-case integer bounds size every accumulator below 2^31; a dense sample
 cross-checks both. The output layer is refitted on the integer hidden activations
 (least squares), which absorbs the tanh approximation and layer-1 rounding.
+
+``quantize(..., kernel="fast")`` (nnik.kernel; C from nnik.fastc) changes three choices, the
+data path above staying the same sequence of exact integer operations:
+
+* step 2 becomes X = dk itself (M = 1, S = 0): layer 1 multiplies u = (d + 2^(K-1)) >> K,
+  its weights carry the normalisation (Q f per um >> K, acc in Q f);
+* step 3's T is in Q(m).(15-m), m = 0..3 the fewest integer bits its worst-case bound needs
+  (a byte-aligned sh = 16 where that costs at most one bit), and tanh is a byte-indexed
+  uniform table (nnik.kernel.ulerp_eval) instead of a portable variant;
+* in residual mode the affine base prefers G = 16 (a byte-aligned 48-bit product on 8-bit CPUs).
 """
 
 from __future__ import annotations
@@ -30,6 +40,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from nnik import activations
+from nnik import kernel as kern
 from nnik.data import exact_targets
 from nnik.domain import domain_um, round_half_up_shift
 from nnik.errors import NnikError
@@ -42,6 +53,7 @@ TANH_IN_FRAC = 12
 ACT_FRAC = 15
 MAX_FRAC = 24
 MIN_FRAC = -8
+AFFINE_FAST_G = 16
 
 
 @dataclass
@@ -63,6 +75,14 @@ class HiddenLayer:
     saturate: bool  # the clamp of T is reachable
     acc_bound: int  # worst-case |acc| over all inputs
     z_interval: tuple[float, float]  # float pre-activation range (IBP)
+    in_frac: int = ACT_FRAC  # Q format of the layer's input: 15 (Q15), or 0 (fast layer 1: um >> K)
+    tanh_frac: int = TANH_IN_FRAC  # T in Q(15 - tanh_frac).tanh_frac; acc in Q(in_frac + f)
+    tanh_step: int = 0  # fast kernel: node step 2^s of the ulerp table (0: a portable variant)
+    t_bound: int = 0  # worst-case |T| (before the clamp, if any)
+
+    @property
+    def tanh_m(self) -> int:
+        return 15 - self.tanh_frac
 
 
 @dataclass
@@ -93,6 +113,7 @@ class IntegerModel:
     out: OutputLayer
     shape: list[int]
     ranges: list[dict] = field(default_factory=list)
+    kernel: str = kern.DEFAULT_KERNEL
 
     # ---- the oracle: every C operation on int64 numpy arrays --------------------------------
     def forward_hidden(self, in_um: np.ndarray, trace: dict | None = None):
@@ -114,9 +135,14 @@ class IntegerModel:
                 if trace is not None:
                     trace[f"tanh_clamps{li}"] = trace.get(f"tanh_clamps{li}", 0) + n_sat
             _record(trace, f"T{li}", T)
-            v = activations.tanh_int(T, self.tanh_variant).astype(np.int64)
+            v = self._tanh(L, T)
             _record(trace, f"H{li}", v)
         return v, d, flags
+
+    def _tanh(self, L: HiddenLayer, T: np.ndarray) -> np.ndarray:
+        if L.tanh_step:
+            return kern.ulerp_eval(T, kern.ulerp_table(L.tanh_m, L.tanh_step), L.tanh_step)
+        return activations.tanh_int(T, self.tanh_variant).astype(np.int64)
 
     def run(self, in_um: np.ndarray, trace: dict | None = None):
         """(N, 2) int inputs in um -> (total int64 (N, n_out) in Q F, delivered int64, flags int64)."""
@@ -151,19 +177,46 @@ class IntegerModel:
             n += self.out.A1.size * 4 * 2
         return int(n)
 
+    def tanh_tables(self) -> list[tuple[int, int]]:
+        """Distinct (m, s) fast tanh tables the model uses (empty for the portable kernel)."""
+        return sorted({(L.tanh_m, L.tanh_step) for L in self.hidden if L.tanh_step})
+
+    def tanh_bytes(self) -> int:
+        """Flash bytes of the tanh table(s)."""
+        if self.kernel == "fast":
+            return int(sum(kern.ulerp_stats(m, s)["table_bytes"] for m, s in self.tanh_tables()))
+        return int(activations.get_variant(self.tanh_variant).coeff_bytes)
+
+    def tanh_summary(self) -> dict:
+        """{"variant", "max_lsb", "rms_lsb"} of the tanh the model uses (worst table if several);
+        for the portable kernel this is activations.sweep(tanh_variant)."""
+        if self.kernel == "fast":
+            st = [kern.ulerp_stats(m, s) for m, s in self.tanh_tables()]
+            worst = max(st, key=lambda r: r["max_lsb"])
+            return {"variant": self.tanh_variant, "max_lsb": worst["max_lsb"], "rms_lsb": worst["rms_lsb"]}
+        sw = activations.sweep(self.tanh_variant)
+        return {"variant": self.tanh_variant, "max_lsb": sw["max_lsb"], "rms_lsb": sw["rms_lsb"]}
+
     def model_hash(self) -> str:
-        blob = json.dumps(
-            {"h": [[L.W.tolist(), L.B.tolist(), L.f, L.sh] for L in self.hidden],
+        d = {"h": [[L.W.tolist(), L.B.tolist(), L.f, L.sh] for L in self.hidden],
              "o": [self.out.V.tolist(), self.out.C.tolist(), self.out.A1.tolist(), self.out.A0.tolist(), self.out.F],
              "i": [self.inp.M.tolist(), self.inp.S.tolist(), self.inp.K.tolist(), self.inp.mid.tolist()],
-             "t": self.tanh_variant}, sort_keys=True)
+             "t": self.tanh_variant}
+        if self.kernel != "portable":  # portable hashes stay what they were
+            d["k"] = [self.kernel, [[L.in_frac, L.tanh_frac, L.tanh_step, L.saturate] for L in self.hidden]]
+        blob = json.dumps(d, sort_keys=True)
         return hashlib.sha256(blob.encode()).hexdigest()[:16]
 
     def formats(self) -> dict:
+        fast = self.kernel == "fast"
         return {
-            "input": {"Q": "Q15", "K": self.inp.K.tolist(), "M": self.inp.M.tolist(), "S": self.inp.S.tolist()},
-            "hidden": [{"weights": f"Q{L.f}", "bias": f"Q{15 + L.f}", "acc": f"Q{15 + L.f}",
-                        "tanh_in": "Q3.12", "shift": L.sh, "tanh_clamp": L.saturate} for L in self.hidden],
+            "kernel": self.kernel,
+            "input": {"Q": "Q0 (um >> K)" if fast else "Q15", "K": self.inp.K.tolist(), "M": self.inp.M.tolist(),
+                      "S": self.inp.S.tolist()},
+            "hidden": [{"weights": f"Q{L.f}", "bias": f"Q{L.in_frac + L.f}", "acc": f"Q{L.in_frac + L.f}",
+                        "tanh_in": f"Q{L.tanh_m}.{L.tanh_frac}", "shift": L.sh, "tanh_clamp": L.saturate,
+                        **({"tanh_table": kern.ulerp_name(L.tanh_m, L.tanh_step)} if L.tanh_step else {})}
+                       for L in self.hidden],
             "output": {"weights": f"Q{self.out.g}", "total": f"Q{self.out.F}", "affine_G": self.out.G.tolist(),
                        "affine_P": self.out.P.tolist()},
         }
@@ -191,7 +244,7 @@ def round_half_up_shift_vec(v: np.ndarray, shift: np.ndarray) -> np.ndarray:
 
 
 # ---- quantisation ----------------------------------------------------------------------------
-def _input_stage(model: TrainedModel) -> InputStage:
+def _input_stage(model: TrainedModel, fast: bool = False) -> InputStage:
     ws = model.scenario.workspace
     lo, hi = domain_um(ws)
     mid = (lo + hi) // 2
@@ -212,65 +265,127 @@ def _input_stage(model: TrainedModel) -> InputStage:
         dk_max = (int(maxd[j]) + ((1 << K) >> 1)) >> K
         while ((dk_max * M + (1 << (S - 1))) >> S) > I16_MAX:
             M -= 1  # never let the domain edge round up to 2^15
+        if fast:  # layer 1 takes u = (d + 2^(K-1)) >> K itself; its weights carry the scale
+            M, S = 1, 0
         Ks.append(K)
         Ms.append(M)
         Ss.append(S)
     return InputStage(lo, hi, mid, np.array(Ks), np.array(Ms), np.array(Ss))
 
 
-def _pick_frac(Wf: np.ndarray, bf: np.ndarray | None, in_abs: int, wmax: int, bias_frac_offset: int, what: str) -> int:
+def _pick_frac(Wf: np.ndarray, bf: np.ndarray | None, in_abs, wmax: int, bias_frac_offset: int, what: str,
+               max_frac: int = MAX_FRAC, half_exp: int = 3) -> int:
     """Largest f with |W 2^f| <= wmax and every row's worst-case accumulator below ACC_LIMIT.
 
     f may go down to MIN_FRAC (a weight step of 2^-f > 1) so that int8 weights can hold large values.
+    in_abs: the inputs' largest magnitude (a scalar, or one per input column); the bias is in
+    Q(f + bias_frac_offset); 2^(f + half_exp) bounds the rounding constant added before the shift.
     """
     if np.abs(Wf).max() > wmax * 2.0**-MIN_FRAC:
         raise NnikError(f"{what}: weight {np.abs(Wf).max():.4g} overflows int{16 if wmax > 127 else 8} "
                         "(retrain with a smaller network or more regularisation)")
-    for f in range(MAX_FRAC, MIN_FRAC - 1, -1):
+    for f in range(max_frac, MIN_FRAC - 1, -1):
         W = np.rint(Wf * 2.0**f)
         if np.abs(W).max() > wmax:
             continue
-        bound = np.abs(W).sum(1) * in_abs
+        bound = (np.abs(W) * in_abs).sum(1)
         if bf is not None:
             bound = bound + np.abs(np.rint(bf * 2.0 ** (f + bias_frac_offset)))
-        if bound.max() + 2 ** (f + 3) < ACC_LIMIT:
+        if bound.max() + 2.0 ** (f + half_exp) < ACC_LIMIT:
             return f
     raise NnikError(f"{what}: no Q format keeps the int32 accumulator from overflowing")
 
 
 def quantize(model: TrainedModel, tanh_variant: str | None = None, weight_bits: int = 16,
-             refit: bool = True, calib: tuple[np.ndarray, np.ndarray] | None = None) -> IntegerModel:
-    """Quantise a trained model. calib = (p_mm, q_units) used for the integer-aware output refit."""
+             refit: bool = True, calib: tuple[np.ndarray, np.ndarray] | None = None,
+             kernel: str | None = None) -> IntegerModel:
+    """Quantise a trained model. calib = (p_mm, q_units) used for the integer-aware output refit.
+
+    kernel: "portable" (default) or "fast" (see nnik.kernel: layer 1 on um >> K, tanh input
+    formats chosen so the tanh input is the top half of the accumulator, a byte-indexed tanh
+    table).  With kernel="fast", tanh_variant=None selects the fast tanh table; naming a
+    variant keeps that variant (tanh input Q3.12).
+    """
     scn = model.scenario
     if not model.normalize:
         raise NnikError("fixed-point export needs a model trained on normalised inputs "
                         "(--no-normalize models exist only for the seed 004 comparison)", scn.source)
+    kernel = kern.check_kernel(kernel)
+    fast = kernel == "fast"
+    fast_tanh = fast and tanh_variant is None
     variant = activations.get_variant(tanh_variant).name
     wmax = I16_MAX if weight_bits == 16 else 127
-    inp = _input_stage(model)
+    inp = _input_stage(model, fast)
     layers = model.net.dense_layers()
     z_lo, z_hi = -np.ones(2), np.ones(2)  # IBP box in normalised units
     hidden: list[HiddenLayer] = []
     for li, (Wf, bf) in enumerate(layers[:-1]):
-        f = _pick_frac(Wf, bf, I16_MAX, wmax, ACT_FRAC, f"hidden layer {li + 1}")
-        if f + ACT_FRAC - TANH_IN_FRAC < 1:
-            raise NnikError(f"hidden layer {li + 1}: weights up to {np.abs(Wf).max():.4g} are too large for "
-                            f"int{weight_bits} storage with a Q3.12 tanh input")
-        W = np.rint(Wf * 2.0**f).astype(np.int64)
-        B = np.rint(bf * 2.0 ** (ACT_FRAC + f)).astype(np.int64)
         c, r = (z_lo + z_hi) / 2, (z_hi - z_lo) / 2
         zc, zr = Wf @ c + bf, np.abs(Wf) @ r
         zl, zh = zc - zr, zc + zr
-        acc_bound = int((np.abs(W).sum(1) * I16_MAX + np.abs(B)).max())
-        # the tanh clamp is needed where the float range (plus rounding slack) can reach 8
-        saturate = bool(max(abs(zl.min()), abs(zh.max())) + 0.01 >= 8.0)
-        hidden.append(HiddenLayer(W, B, f, f + ACT_FRAC - TANH_IN_FRAC, saturate, acc_bound,
-                                  (float(zl.min()), float(zh.max()))))
+        if fast:
+            hidden.append(_fast_hidden(model, inp, li, Wf, bf, wmax, weight_bits, fast_tanh, (zl, zh)))
+        else:
+            f = _pick_frac(Wf, bf, I16_MAX, wmax, ACT_FRAC, f"hidden layer {li + 1}")
+            if f + ACT_FRAC - TANH_IN_FRAC < 1:
+                raise NnikError(f"hidden layer {li + 1}: weights up to {np.abs(Wf).max():.4g} are too large for "
+                                f"int{weight_bits} storage with a Q3.12 tanh input")
+            W = np.rint(Wf * 2.0**f).astype(np.int64)
+            B = np.rint(bf * 2.0 ** (ACT_FRAC + f)).astype(np.int64)
+            acc_bound = int((np.abs(W).sum(1) * I16_MAX + np.abs(B)).max())
+            # the tanh clamp is needed where the float range (plus rounding slack) can reach 8
+            saturate = bool(max(abs(zl.min()), abs(zh.max())) + 0.01 >= 8.0)
+            hidden.append(HiddenLayer(W, B, f, f + ACT_FRAC - TANH_IN_FRAC, saturate, acc_bound,
+                                      (float(zl.min()), float(zh.max()))))
         z_lo, z_hi = np.tanh(zl), np.tanh(zh)
+    if fast_tanh:
+        variant = "+".join(dict.fromkeys(kern.ulerp_name(L.tanh_m, L.tanh_step) for L in hidden))
     shape = list(model.net.shape)
-    im = IntegerModel(scn.name, scn.unit, scn.outputs, variant, weight_bits, inp, hidden, None, shape)
+    im = IntegerModel(scn.name, scn.unit, scn.outputs, variant, weight_bits, inp, hidden, None, shape,
+                      kernel=kernel)
     im.out = _output_layer(model, im, layers[-1], wmax, refit, calib)
     return im
+
+
+def _fast_hidden(model, inp: InputStage, li: int, Wf, bf, wmax: int, weight_bits: int, fast_tanh: bool,
+                 z) -> HiddenLayer:
+    """A hidden layer of the fast kernel (see nnik.kernel)."""
+    what = f"hidden layer {li + 1}"
+    if li == 0:
+        # inputs u = (d + 2^(K-1)) >> K (um, int16): fold the normalisation into the weights
+        s = model.scaling
+        half_um = s.in_half * 1000.0
+        Wq = Wf * (2.0 ** inp.K / half_um)[None, :]
+        bq = bf + Wf @ ((inp.mid - s.in_center * 1000.0) / half_um)
+        in_frac = 0
+        maxd = np.maximum(inp.hi - inp.mid, inp.mid - inp.lo)
+        in_abs = np.array([(int(m) + ((1 << int(k)) >> 1)) >> int(k) for m, k in zip(maxd, inp.K)], dtype=np.int64)
+    else:
+        Wq, bq, in_frac, in_abs = Wf, bf, ACT_FRAC, np.int64(I16_MAX)
+    f = _pick_frac(Wq, bq, in_abs, wmax, in_frac, what, max_frac=MAX_FRAC + ACT_FRAC - in_frac,
+                   half_exp=in_frac - TANH_IN_FRAC)
+    W = np.rint(Wq * 2.0**f).astype(np.int64)
+    B = np.rint(bq * 2.0 ** (in_frac + f)).astype(np.int64)
+    acc_bound = int(((np.abs(W) * in_abs).sum(1) + np.abs(B)).max())
+
+    def sh_of(m: int) -> int:
+        return in_frac + f - (15 - m)
+
+    def t_bound(m: int) -> int:
+        sh = sh_of(m)
+        return (acc_bound + (1 << (sh - 1))) >> sh
+
+    fits = [m for m in range(4) if sh_of(m) >= 1 and t_bound(m) <= I16_MAX]
+    if fast_tanh:
+        m, step = kern.choose_tanh_format(sh_of, fits[0] if fits else 3)
+    else:
+        m, step = 3, 0  # a portable variant: its Q3.12 contract
+    if sh_of(m) < 1:
+        raise NnikError(f"{what}: weights up to {np.abs(Wf).max():.4g} are too large for int{weight_bits} "
+                        f"storage with a Q{m}.{15 - m} tanh input")
+    zl, zh = z
+    return HiddenLayer(W, B, f, sh_of(m), m not in fits, acc_bound, (float(zl.min()), float(zh.max())),
+                       in_frac=in_frac, tanh_frac=15 - m, tanh_step=step, t_bound=min(t_bound(m), I16_MAX + 1))
 
 
 def _output_layer(model, im, last, wmax, refit, calib) -> OutputLayer:
@@ -319,10 +434,13 @@ def _output_layer(model, im, last, wmax, refit, calib) -> OutputLayer:
     P = np.zeros((n_out, 2), np.int64)
     G = np.zeros((n_out, 2), np.int64)
     if residual:
+        # the fast kernel prefers G = 16: floor(d A / 2^16) is then bytes 2..5 of a 48-bit
+        # product in its assembly (the C keeps the split form below; both are exact)
+        g_order = ([AFFINE_FAST_G] if im.kernel == "fast" else []) + list(range(40, -1, -1))
         for k in range(n_out):
             for j in range(2):
                 P_max = int(np.floor(np.log2(ACC_LIMIT / (maxd[j] + 1))))
-                for Gk in range(40, -1, -1):
+                for Gk in g_order:
                     a = int(np.rint(A[k, j] * 2.0 ** (F + Gk)))
                     p = min(P_max, Gk)
                     a1 = a >> p
@@ -338,11 +456,20 @@ def range_report(im: IntegerModel, dense_in_um: np.ndarray) -> list[dict]:
     """Per tensor: analytic integer bound, observed range on a dense sample, headroom bits."""
     trace: dict = {}
     im.run(dense_in_um, trace)
-    rows = [{"tensor": "X (Q15 input)", "bound": I16_MAX, "observed": list(trace["X"])}]
+    if im.kernel == "fast":
+        maxd = np.maximum(im.inp.hi - im.inp.mid, im.inp.mid - im.inp.lo)
+        u_max = max((int(m) + ((1 << int(k)) >> 1)) >> int(k) for m, k in zip(maxd, im.inp.K))
+        rows = [{"tensor": "u (layer-1 input, um >> K)", "bound": u_max, "observed": list(trace["X"])}]
+    else:
+        rows = [{"tensor": "X (Q15 input)", "bound": I16_MAX, "observed": list(trace["X"])}]
     for li, L in enumerate(im.hidden):
-        rows.append({"tensor": f"acc{li + 1} (Q{15 + L.f})", "bound": L.acc_bound, "observed": list(trace[f"acc{li}"]),
-                     "float_preactivation": list(L.z_interval)})
-        rows.append({"tensor": f"tanh_in{li + 1} (Q3.12)", "bound": I16_MAX if L.saturate else int(-(-L.acc_bound >> L.sh)),
+        rows.append({"tensor": f"acc{li + 1} (Q{L.in_frac + L.f})", "bound": L.acc_bound,
+                     "observed": list(trace[f"acc{li}"]), "float_preactivation": list(L.z_interval)})
+        if L.t_bound:
+            t_bound = I16_MAX if L.saturate else L.t_bound
+        else:
+            t_bound = I16_MAX if L.saturate else int(-(-L.acc_bound >> L.sh))
+        rows.append({"tensor": f"tanh_in{li + 1} (Q{L.tanh_m}.{L.tanh_frac})", "bound": t_bound,
                      "observed": list(trace[f"T{li}"]), "clamp_emitted": L.saturate,
                      "clamps_in_sample": int(trace.get(f"tanh_clamps{li}", 0))})
         rows.append({"tensor": f"h{li + 1} (Q15)", "bound": I16_MAX, "observed": list(trace[f"H{li}"])})

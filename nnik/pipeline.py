@@ -109,18 +109,33 @@ def _truth_for_um(scn, in_um: np.ndarray, fallback_q: np.ndarray) -> np.ndarray:
     return exact_targets(scn, in_um / 1000.0) if scn.mechanism.analytic else fallback_q
 
 
+def quantize_kernel(model: TrainedModel, ds: Dataset, kernel: str):
+    """The scenario's integer model for one kernel ("fast" or "portable")."""
+    from nnik import fixedpoint as fx
+
+    scn = model.scenario
+    tanh = None if scn.export["tanh"] == "default" else scn.export["tanh"]
+    return fx.quantize(model, tanh_variant=tanh, weight_bits=scn.export["weight_bits"],
+                       calib=fx.calibration_set(model, ds.p["train"], ds.q["train"]), kernel=kernel)
+
+
+def other_kernel(kernel: str) -> str:
+    return "portable" if kernel == "fast" else "fast"
+
+
 def export(outdir: Path):
-    """Quantise model.pt, write OUTDIR/c/NAME.{h,c}; returns the integer model."""
+    """Quantise model.pt, write OUTDIR/c/NAME.{h,c} (the scenario's kernel) and, for comparison,
+    OUTDIR/c/<other kernel>/NAME.{h,c}; returns the integer model of the scenario's kernel."""
     from nnik import fixedpoint as fx
     from nnik.export import render_model_c, write_sources
 
     model = TrainedModel.load(outdir / MODEL_FILE)
     ds = Dataset.load(outdir / DATA_FILE)
     scn = model.scenario
-    tanh = None if scn.export["tanh"] == "default" else scn.export["tanh"]
-    im = fx.quantize(model, tanh_variant=tanh, weight_bits=scn.export["weight_bits"],
-                     calib=fx.calibration_set(model, ds.p["train"], ds.q["train"]))
+    im = quantize_kernel(model, ds, scn.export["kernel"])
     write_sources(render_model_c(im, scn.source), outdir / C_DIR)
+    alt = other_kernel(im.kernel)
+    write_sources(render_model_c(quantize_kernel(model, ds, alt), scn.source), outdir / C_DIR / alt)
     in_um = np.rint(ds.p["test"] * 1000).astype(np.int64)
     truth = _truth_for_um(scn, in_um, ds.q["test"])
     baselines = _export_baselines(scn, im, ds, outdir / C_DIR, in_um, truth)
@@ -130,13 +145,11 @@ def export(outdir: Path):
     ranges = fx.range_report(im, np.concatenate([fx.dense_inputs_um(im), in_um]))
     if not all(r["within_bound"] for r in ranges):
         raise NnikError("range analysis failed: a tensor exceeded its proven bound", str(outdir))
-    from nnik import activations
-
-    tanh_stats = activations.sweep(im.tanh_variant)
+    tanh_stats = im.tanh_summary()
     write_metrics(outdir, {
         "fixed": {**stats, "delivered_max_abs": np.abs(delivered - truth).max(0).tolist(),
                   "delivered_rms": np.sqrt(((delivered - truth) ** 2).mean(0)).tolist(),
-                  "tanh_variant": im.tanh_variant, "weight_bits": im.weight_bits,
+                  "tanh_variant": im.tanh_variant, "weight_bits": im.weight_bits, "kernel": im.kernel,
                   "weights_bytes": im.weights_bytes(), "model_hash": im.model_hash(),
                   "q_formats": im.formats(), "ranges": ranges},
         "tanh": {"variant": im.tanh_variant, **{k: tanh_stats[k] for k in ("max_lsb", "rms_lsb") if k in tanh_stats}},
@@ -149,9 +162,7 @@ def export(outdir: Path):
 
 def mlp_flash_bytes(im) -> int:
     """Bytes of constant tables the MLP needs: weights, biases and the tanh table."""
-    from nnik import activations
-
-    return im.weights_bytes() + activations.get_variant(im.tanh_variant).coeff_bytes
+    return im.weights_bytes() + im.tanh_bytes()
 
 
 def _export_baselines(scn, im, ds, c_dir: Path, in_um: np.ndarray, truth: np.ndarray) -> dict:
@@ -208,6 +219,10 @@ def verify(outdir: Path, target: str = "host"):
     if target == "host":
         inputs = verification_inputs(im, ds.p["test"])
         res = verify_host(im, outdir / C_DIR, inputs)
+        alt = other_kernel(im.kernel)
+        alt_im = quantize_kernel(TrainedModel.load(outdir / MODEL_FILE), ds, alt)
+        res["other_kernel"] = {"kernel": alt, **verify_host(alt_im, outdir / C_DIR / alt, {"test": inputs["test"]})}
+        res["bit_exact"] = res["bit_exact"] and res["other_kernel"]["bit_exact"]
         metrics = load_metrics(outdir)
         metrics["host"] = res
         metrics["baselines"] = _verify_baselines_host(outdir, metrics["baselines"], ds, inputs)
@@ -268,21 +283,26 @@ def verify_target(outdir: Path, target: str) -> dict:
     truth = _truth_for_um(scn, vec[inside], ds.q["test"][:n_in]) if scn.mechanism.analytic else None
     _, want, want_flags = im.run(vec)
 
-    def run(prefix, opt):
+    def run(prefix, opt, src_dir=c_dir, tag=""):
         try:
-            return run_on_target(target=target, sources=[c_dir / f"{prefix}.c"], include_dirs=[c_dir], name=prefix,
+            return run_on_target(target=target, sources=[src_dir / f"{prefix}.c"], include_dirs=[src_dir], name=prefix,
                                  vectors=vec, opt=opt or "-Os",
-                                 workdir=(outdir / "targets" / target / (prefix + opt)).resolve())
+                                 workdir=(outdir / "targets" / target / (prefix + tag + opt)).resolve())
         except TargetError as exc:
             raise NnikError(f"{target}: {exc}") from None
 
     kernels, mismatches = {}, 0
-    for opt in TARGET_OPTS[target]:
-        r = run(scn.name, opt)
-        bad = np.any(r["outputs"] != want, axis=1) | (r["flags"] != want_flags)
+    alt = other_kernel(im.kernel)
+    alt_im = quantize_kernel(TrainedModel.load(outdir / MODEL_FILE), ds, alt)
+    _, alt_want, alt_flags = alt_im.run(vec)
+    runs = [(im.kernel, opt, c_dir, want, want_flags) for opt in TARGET_OPTS[target]]
+    runs.append((alt, TARGET_OPTS[target][0], c_dir / alt, alt_want, alt_flags))
+    for kernel, opt, src_dir, w, wf in runs:
+        r = run(scn.name, opt, src_dir, kernel)
+        bad = np.any(r["outputs"] != w, axis=1) | (r["flags"] != wf)
         mismatches += int(bad.sum())
-        kernels[f"mlp {opt}".strip()] = {**_target_row(r, truth, r["outputs"], inside), "mismatches": int(bad.sum())}
-    main = kernels[min(kernels, key=lambda k: kernels[k]["cycles"])]
+        kernels[f"{kernel} {opt}".strip()] = {**_target_row(r, truth, r["outputs"], inside), "mismatches": int(bad.sum())}
+    main = kernels[f"{im.kernel} {TARGET_OPTS[target][0]}".strip()]
     base = {}
     if metrics["baselines"]["float"]["available"]:
         r = run(f"{scn.name}_float", TARGET_OPTS[target][0])
@@ -294,7 +314,7 @@ def verify_target(outdir: Path, target: str) -> dict:
     lut_out, lut_flags, _ = bl.lut_int(lut, vec)
     lut_bad = int((np.any(r["outputs"] != lut_out, axis=1) | (r["flags"] != lut_flags)).sum())
     base["lut"] = {**_target_row(r, truth, r["outputs"], inside), "mismatches": lut_bad}
-    res = {**main, "bit_exact": mismatches == 0 and lut_bad == 0, "mismatches": mismatches, "points": int(len(vec)),
+    res = {**main, "kernel": im.kernel, "bit_exact": mismatches == 0 and lut_bad == 0, "mismatches": mismatches, "points": int(len(vec)),
            "clock_hz": 16_000_000, "kernels": kernels, "baselines": base}
     if "cycles" in base["float"]:
         res["speedup_vs_float"] = base["float"]["cycles"] / main["cycles"]

@@ -26,6 +26,7 @@
 #if defined(__AVR__) && defined(__GNUC__)
 #include <avr/pgmspace.h>
 #define NNIK_FLASH PROGMEM
+#define NNIK_FLASH_AVR_PROGMEM 1 /* tables are read with LPM (nnik_kernel.h relies on it) */
 #define NNIK_RD_U8(p) ((uint8_t)pgm_read_byte(p))
 #define NNIK_RD_U16(p) ((uint16_t)pgm_read_word(p))
 #define NNIK_RD_I16(p) ((int16_t)pgm_read_word(p))
@@ -34,6 +35,7 @@
 #elif defined(__SDCC) || defined(SDCC)
 /* __SDCC_pic16 and the other SDCC ports: the __code address space. */
 #define NNIK_FLASH __code
+#define NNIK_FLASH_SDCC_CODE 1 /* tables are in __code (nnik_kernel.h's PIC18 path reads them with TBLRD) */
 
 #elif defined(__XC8) || defined(__XC8__)
 #define NNIK_FLASH
