@@ -133,6 +133,20 @@ def cmd_verify(args) -> None:
         raise NnikError(f"{args.target}: {res.get('mismatches')} mismatches between the C and the integer model")
 
 
+def cmd_estimate(args) -> None:
+    from nnik.estimate import estimate
+
+    out = Path(args.model_dir)
+    model = pipeline.TrainedModel.load(out / pipeline.MODEL_FILE)
+    ds = pipeline.Dataset.load(out / pipeline.DATA_FILE)
+    im = pipeline.quantize_kernel(model, ds, args.kernel or model.scenario.export["kernel"])
+    e = estimate(im, args.target, args.compiler, clock_hz=args.clock_hz)
+    label = "" if e.get("validated", True) else "  (UNVALIDATED extrapolation)"
+    console.print(f"{im.name} ({im.kernel} kernel) on {args.target} ({e['profile']}){label}: "
+                  f"{e['cycles']:.0f} cycles = {e['us']:.1f} us at {args.clock_hz / 1e6:g} MHz, "
+                  f"flash {e['flash_bytes']} B, RAM {e['ram_bytes']} B")
+
+
 def cmd_tanh(args) -> None:
     from nnik import activations
 
@@ -205,6 +219,13 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("model_dir")
     p.add_argument("--target", default="host", choices=("host", "avr", "pic18"))
     p.set_defaults(func=cmd_verify)
+    p = sub.add_parser("estimate", help="static prediction of cycles, flash and RAM on a target")
+    p.add_argument("model_dir")
+    p.add_argument("--target", required=True, choices=("avr", "pic18"))
+    p.add_argument("--compiler", help="profile, e.g. avr-gcc-Os, avr-gcc-O2, pic18-sdcc (default: the target's first)")
+    p.add_argument("--clock-hz", type=int, default=16_000_000)
+    p.add_argument("--kernel", choices=("fast", "portable"), help="default: the scenario's [export] kernel")
+    p.set_defaults(func=cmd_estimate)
     p = sub.add_parser("report", help="write the HTML/Markdown accuracy and latency report")
     p.add_argument("model_dir")
     p.add_argument("-o", "--outdir", help="report directory (default MODEL_DIR/report)")

@@ -262,6 +262,18 @@ def _target_row(res: dict, truth_in: np.ndarray | None, out: np.ndarray, inside:
     return row
 
 
+def estimate_row(im, target: str, measured: dict | None = None) -> dict:
+    """The static estimator's prediction, and its % difference from a measurement if given."""
+    from nnik.estimate import estimate
+
+    e = estimate(im, target)
+    row = {k: e[k] for k in ("cycles", "flash_bytes", "ram_bytes", "profile", "validated") if k in e}
+    if measured:
+        row["cycles_error_pct"] = 100 * (e["cycles"] - measured["cycles"]) / measured["cycles"]
+        row["flash_error_pct"] = 100 * (e["flash_bytes"] - measured["flash_bytes"]) / max(measured["flash_bytes"], 1)
+    return row
+
+
 def verify_target(outdir: Path, target: str) -> dict:
     """Run the MLP (each compiler setting), the float IK and the LUT in the same harness."""
     from nnik import baselines as bl
@@ -318,5 +330,6 @@ def verify_target(outdir: Path, target: str) -> dict:
            "clock_hz": 16_000_000, "kernels": kernels, "baselines": base}
     if "cycles" in base["float"]:
         res["speedup_vs_float"] = base["float"]["cycles"] / main["cycles"]
+    res["estimate"] = estimate_row(im, target, main)
     write_metrics(outdir, {"targets": {**metrics.get("targets", {}), target: res}})
     return res
