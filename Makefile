@@ -19,14 +19,18 @@ toolchains:
 	bash scripts/install_toolchains.sh
 	bash scripts/install_chromium.sh
 
-demo: setup
+demo: setup toolchains
 	$(PYTHON) -m nnik run $(SCENARIO)
 
 test: setup toolchains
 	bash scripts/run_tests.sh
 
+# per-target tables (MLP kernels, float math.h IK, LUT, seed 000 Table 1), then the estimator's
+# validation sweep (predicted vs measured cycles and flash on 11 architectures x 2 tanh)
 bench: setup toolchains
-	$(PYTHON) -m nnik.bench
+	$(PYTHON) -m nnik.bench $(SCENARIO)
+	$(PYTHON) -m nnik.estimate sweep
+	$(PYTHON) -m nnik.estimate sweep --kernel fast --tanh '' --arch 4 --arch 6 --arch 8 --arch 10 --arch 12 --arch 16
 
 clean:
 	rm -rf build $(STAMP)
