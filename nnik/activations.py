@@ -52,6 +52,7 @@ from typing import Iterator, Mapping, Sequence
 import numpy as np
 
 from nnik.errors import NnikError
+from nnik.templating import RUNTIME as RUNTIME_DIR
 
 Q_IN = 12  # input Q3.12
 Q_OUT = 15  # output Q15
@@ -73,10 +74,6 @@ PAPER_PUBLISHED_COEFFS: tuple[tuple[float, ...], ...] = (
     (1.3575e-4, -3.2404e-3, 3.1089e-2, -1.5018e-1, 3.6627e-1, 6.3795e-1),
 )
 PAPER_BREAKS = (0.0, 1.0, 2.0, 3.0, 5.3)
-
-_REPO_ROOT = Path(__file__).resolve().parent.parent
-TEMPLATE_DIR = _REPO_ROOT / "codegen" / "templates"
-RUNTIME_DIR = _REPO_ROOT / "codegen" / "runtime"
 
 
 # --------------------------------------------------------------------------------------
@@ -963,18 +960,12 @@ def _c_int_list(vals: Sequence[int], per_line: int = 10, indent: str = "    ") -
 
 def render_tanh_c(variant: str | Variant | None = None, prefix: str = "nnik") -> str:
     """C99 source of ``static int16_t {prefix}_tanh(int16_t v)`` and its flash tables."""
-    import jinja2
+    from nnik.templating import environment
 
     var = get_variant(variant)
     if not prefix.isidentifier():
         raise NnikError(f"C prefix {prefix!r} is not an identifier")
-    env = jinja2.Environment(
-        loader=jinja2.FileSystemLoader(str(TEMPLATE_DIR)),
-        undefined=jinja2.StrictUndefined,
-        trim_blocks=True,
-        lstrip_blocks=True,
-        keep_trailing_newline=True,
-    )
+    env = environment()
     s = sweep(var)
     ctx = dict(prefix=prefix, v=var, stats=s, c_list=_c_int_list)
     if var.kind == "poly":

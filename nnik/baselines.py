@@ -48,18 +48,16 @@ LUT (:func:`build_lut`, :func:`lut_int`, :func:`render_lut_c`)
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 
 from nnik.domain import clamp_um, domain_um
 from nnik.errors import NnikError
+from nnik.templating import CODEGEN, RUNTIME, environment
 from nnik.scenario import Scenario
 
-_REPO_ROOT = Path(__file__).resolve().parent.parent
-TEMPLATE_DIR = _REPO_ROOT / "codegen" / "templates"
-RUNTIME_DIR = _REPO_ROOT / "codegen" / "runtime"
-HOST_DRIVER = _REPO_ROOT / "codegen" / "harness" / "host" / "ik_driver.c"
+RUNTIME_DIR = RUNTIME
+HOST_DRIVER = CODEGEN / "harness" / "host" / "ik_driver.c"
 
 FRAC_BITS = 15  # cell fraction, Q15: weights in [0, 2^15] fit uint16, products are 16x16 -> 32
 K_MAX = 15  # most fractional bits kept in an int16 entry (keeps acc + 2^(s-1) < 2^31)
@@ -70,18 +68,6 @@ NO_CLOSED_FORM = (
     "a fair baseline"
 )
 NO_MODEL = "a measured machine has no model, so there is no closed-form IK to evaluate in float"
-
-
-def _env():
-    import jinja2
-
-    return jinja2.Environment(
-        loader=jinja2.FileSystemLoader(str(TEMPLATE_DIR)),
-        undefined=jinja2.StrictUndefined,
-        trim_blocks=True,
-        lstrip_blocks=True,
-        keep_trailing_newline=True,
-    )
 
 
 def _check_name(name: str) -> str:
@@ -232,7 +218,7 @@ def render_float_c(scn: Scenario, name: str | None = None) -> dict[str, str] | N
         dist=getattr(m, "dist", None),
         **_domain_ctx(scn),
     )
-    env = _env()
+    env = environment()
     return {
         f"{name}_float.h": env.get_template("float_ik.h.j2").render(**ctx),
         f"{name}_float.c": env.get_template("float_ik.c.j2").render(**ctx),
@@ -607,7 +593,7 @@ def render_lut_c(lut: Lut, name: str | None = None) -> dict[str, str]:
         code_hi=_i32(lut.code_range[1]) if lut.code_range else None,
         cell_um=[float(lut.node_um[a][1]) for a in range(2)],
     )
-    env = _env()
+    env = environment()
     return {
         f"{name}_lut.h": env.get_template("lut_ik.h.j2").render(**ctx),
         f"{name}_lut.c": env.get_template("lut_ik.c.j2").render(**ctx),

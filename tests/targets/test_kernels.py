@@ -11,7 +11,6 @@ Skips when a toolchain is missing, unless NNIK_REQUIRE_TOOLCHAINS=1 (then fails)
 """
 from __future__ import annotations
 
-import os
 from pathlib import Path
 
 import numpy as np
@@ -20,19 +19,12 @@ import pytest
 from nnik import fixedpoint as fx
 from nnik.data import Dataset
 from nnik.export import render_model_c, write_sources
-from nnik.targets import available, run_on_target
+from nnik.targets import run_on_target
+from tests.targets.runner_helpers import need_toolchain
 from nnik.train import TrainedModel
 
 AVR_TARGET_CYCLES = 1000  # the mission's targets for galvo_cba2012, whole NAME_ik call
 PIC18_TARGET_CYCLES = 3000
-
-
-def need(target: str) -> None:
-    ok, why = available(target)
-    if not ok:
-        if os.environ.get("NNIK_REQUIRE_TOOLCHAINS") == "1":
-            pytest.fail(f"NNIK_REQUIRE_TOOLCHAINS=1 but {why}")
-        pytest.skip(why)
 
 
 def fast_build(run_dir: Path, out_dir: Path):
@@ -97,7 +89,7 @@ def _report(capsys, what: str, res: dict) -> None:
 
 @pytest.mark.parametrize("opt", ["-Os", "-O2"])
 def test_galvo_fast_avr_bit_exact_and_under_1000_cycles(galvo_fast, tmp_path, capsys, opt):
-    need("avr")
+    need_toolchain("avr")
     im, d, vec = galvo_fast
     assert len(vec) >= 200
     res = run_and_compare(im, d, vec, "avr", opt, tmp_path)
@@ -106,7 +98,7 @@ def test_galvo_fast_avr_bit_exact_and_under_1000_cycles(galvo_fast, tmp_path, ca
 
 
 def test_galvo_fast_pic18_bit_exact_and_under_3000_cycles(galvo_fast, tmp_path, capsys):
-    need("pic18")
+    need_toolchain("pic18")
     im, d, vec = galvo_fast
     res = run_and_compare(im, d, vec, "pic18", "", tmp_path)
     _report(capsys, "galvo_cba2012 fast kernel, SDCC pic16", res)
@@ -115,7 +107,7 @@ def test_galvo_fast_pic18_bit_exact_and_under_3000_cycles(galvo_fast, tmp_path, 
 
 @pytest.mark.parametrize("target,opt", [("avr", "-Os"), ("pic18", "")])
 def test_corexy_fast_bit_exact(corexy_fast, tmp_path, capsys, target, opt):
-    need(target)
+    need_toolchain(target)
     im, d, vec = corexy_fast
     assert im.out.residual and len(vec) >= 200
     res = run_and_compare(im, d, vec, target, opt or "-Os", tmp_path)
@@ -124,7 +116,7 @@ def test_corexy_fast_bit_exact(corexy_fast, tmp_path, capsys, target, opt):
 
 def test_galvo_fast_portable_c_on_avr_is_bit_exact(galvo_fast, tmp_path):
     """-DNNIK_PORTABLE: the C99 value primitives (what XC8 or CCS compile) give the same bits."""
-    need("avr")
+    need_toolchain("avr")
     im, d, vec = galvo_fast
     res = run_on_target(target="avr", sources=[d / f"{im.name}.c"], include_dirs=[d], name=im.name,
                         vectors=vec[:60], opt="-Os", workdir=tmp_path, extra_cflags=["-DNNIK_PORTABLE"],
