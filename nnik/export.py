@@ -5,6 +5,7 @@ from __future__ import annotations
 import shutil
 from pathlib import Path
 
+import jinja2
 import numpy as np
 
 from nnik import activations
@@ -12,8 +13,9 @@ from nnik import kernel as kern
 from nnik.errors import NnikError
 from nnik.fixedpoint import ACT_FRAC, IntegerModel
 
-from nnik.templating import CODEGEN, RUNTIME, TEMPLATES, environment  # noqa: F401  (re-exported)
-
+CODEGEN = Path(__file__).resolve().parent.parent / "codegen"
+TEMPLATES = CODEGEN / "templates"
+RUNTIME = CODEGEN / "runtime"
 RUNTIME_HEADERS = ("nnik_flash.h", "nnik_kernel.h")  # copied next to every generated file
 
 
@@ -21,6 +23,16 @@ def c_list(values, per_line: int = 10, suffix: str = "") -> str:
     vals = [f"{int(v)}{suffix}" for v in np.asarray(values).ravel()]
     rows = [", ".join(vals[i:i + per_line]) for i in range(0, len(vals), per_line)]
     return ",\n".join("    " + r for r in rows)
+
+
+def environment() -> jinja2.Environment:
+    return jinja2.Environment(
+        loader=jinja2.FileSystemLoader(str(TEMPLATES)),
+        undefined=jinja2.StrictUndefined,
+        trim_blocks=True,
+        lstrip_blocks=True,
+        keep_trailing_newline=True,
+    )
 
 
 def render_model_c(im: IntegerModel, scenario_source: str, kernel: str | None = None) -> dict[str, str]:
