@@ -10,6 +10,7 @@ import itertools
 import json
 import os
 import shutil
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -167,3 +168,14 @@ def test_held_out_2_10_2_within_3_percent_on_avr_os(tmp_path):
     assert err <= 0.03, (e["cycles"], r["cycles_mean"])
     assert abs(e["flash_bytes"] - r["model_flash_bytes"]) / r["model_flash_bytes"] <= 0.05
     assert json.dumps(e)  # plain JSON types
+
+
+def test_calibration_matches_the_current_generator():
+    """The stored calibration was measured on the C the generator emits today: if a template or
+    kernel source changes, re-run `python3 -m nnik.estimate calibrate --target avr|pic18`."""
+    for kernel in ("portable", "fast"):
+        for target, profile in (("avr", "avr-gcc-Os"), ("avr", "avr-gcc-O2"), ("pic18", "pic18-sdcc")):
+            cal = json.loads((Path(est.__file__).parent / "calibration" / f"{profile}.json").read_text())
+            kc = cal["kernels"].get(kernel)
+            assert kc is not None, (profile, kernel)
+            assert kc.get("codegen_hash", cal.get("codegen_hash")) == est.codegen_hash(kernel), (profile, kernel)
