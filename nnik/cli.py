@@ -80,8 +80,7 @@ def cmd_run(args) -> None:
     pipeline.train(scn, out, normalize=False if args.no_normalize else None)
     m = pipeline.evaluate(out)
     if not args.no_normalize:
-        pipeline.export(out)
-        console.print(f"exported C to {out / pipeline.C_DIR}/; verifying on the host ...")
+        console.print(f"exporting C to {out / pipeline.C_DIR}/ and verifying it on the host ...")
         pipeline.verify(out, "host")
         for target in ("avr", "pic18"):
             res = pipeline.verify(out, target)
@@ -120,7 +119,7 @@ def cmd_evaluate(args) -> None:
 
 def cmd_export(args) -> None:
     out = Path(args.model_dir)
-    im = pipeline.export(out)
+    im, _ = pipeline.export(out)
     console.print(f"wrote {out / pipeline.C_DIR}/{im.name}.h and {im.name}.c ({im.weights_bytes()} bytes of tables)")
     print_accuracy(pipeline.load_metrics(out))
 

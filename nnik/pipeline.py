@@ -125,7 +125,7 @@ def other_kernel(kernel: str) -> str:
 
 def export(outdir: Path):
     """Quantise model.pt, write OUTDIR/c/NAME.{h,c} (the scenario's kernel) and, for comparison,
-    OUTDIR/c/<other kernel>/NAME.{h,c}; returns the integer model of the scenario's kernel."""
+    OUTDIR/c/<other kernel>/NAME.{h,c}; returns both integer models (scenario's kernel first)."""
     from nnik import fixedpoint as fx
     from nnik.export import render_model_c, write_sources
 
@@ -134,8 +134,8 @@ def export(outdir: Path):
     scn = model.scenario
     im = quantize_kernel(model, ds, scn.export["kernel"])
     write_sources(render_model_c(im, scn.source), outdir / C_DIR)
-    alt = other_kernel(im.kernel)
-    write_sources(render_model_c(quantize_kernel(model, ds, alt), scn.source), outdir / C_DIR / alt)
+    alt_im = quantize_kernel(model, ds, other_kernel(im.kernel))
+    write_sources(render_model_c(alt_im, scn.source), outdir / C_DIR / alt_im.kernel)
     in_um = np.rint(ds.p["test"] * 1000).astype(np.int64)
     truth = _truth_for_um(scn, in_um, ds.q["test"])
     baselines = _export_baselines(scn, im, ds, outdir / C_DIR, in_um, truth)
@@ -157,7 +157,7 @@ def export(outdir: Path):
     })
     np.savez_compressed(outdir / FIXED_EVAL_FILE, p_test=ds.p["test"], q_true=truth, q_float=model.predict(ds.p["test"]),
                         q_fixed=pre, q_delivered=delivered)
-    return im
+    return im, alt_im
 
 
 def mlp_flash_bytes(im) -> int:
@@ -214,23 +214,22 @@ def verify(outdir: Path, target: str = "host"):
     """Run the generated C on a target and compare it bit for bit with the integer model."""
     from nnik.verify_host import verification_inputs, verify_host
 
-    im = export(outdir)  # deterministic: regenerates the same C and integer model
-    ds = Dataset.load(outdir / DATA_FILE)
-    if target == "host":
-        inputs = verification_inputs(im, ds.p["test"])
-        res = verify_host(im, outdir / C_DIR, inputs)
-        alt = other_kernel(im.kernel)
-        alt_im = quantize_kernel(TrainedModel.load(outdir / MODEL_FILE), ds, alt)
-        res["other_kernel"] = {"kernel": alt, **verify_host(alt_im, outdir / C_DIR / alt, {"test": inputs["test"]})}
-        res["bit_exact"] = res["bit_exact"] and res["other_kernel"]["bit_exact"]
-        metrics = load_metrics(outdir)
-        metrics["host"] = res
-        metrics["baselines"] = _verify_baselines_host(outdir, metrics["baselines"], ds, inputs)
-        write_metrics(outdir, metrics, merge=False)
-        return res
     if target in TARGET_OPTS:
         return verify_target(outdir, target)
-    raise NnikError(f"unknown target {target!r} (host, avr, pic18)")
+    if target != "host":
+        raise NnikError(f"unknown target {target!r} (host, avr, pic18)")
+    im, alt_im = export(outdir)  # deterministic: regenerates the same C and integer models
+    ds = Dataset.load(outdir / DATA_FILE)
+    inputs = verification_inputs(im, ds.p["test"])
+    res = verify_host(im, outdir / C_DIR, inputs)
+    res["other_kernel"] = {"kernel": alt_im.kernel,
+                           **verify_host(alt_im, outdir / C_DIR / alt_im.kernel, {"test": inputs["test"]})}
+    res["bit_exact"] = res["bit_exact"] and res["other_kernel"]["bit_exact"]
+    metrics = load_metrics(outdir)
+    metrics["host"] = res
+    metrics["baselines"] = _verify_baselines_host(outdir, metrics["baselines"], ds, inputs)
+    write_metrics(outdir, metrics, merge=False)
+    return res
 
 
 
@@ -284,7 +283,7 @@ def verify_target(outdir: Path, target: str) -> dict:
         res = {"not_run": reason}
         write_metrics(outdir, {"targets": {**load_metrics(outdir).get("targets", {}), target: res}})
         return res
-    im = export(outdir)
+    im, alt_im = export(outdir)
     ds = Dataset.load(outdir / DATA_FILE)
     metrics = load_metrics(outdir)
     scn = TrainedModel.load(outdir / MODEL_FILE).scenario
@@ -304,8 +303,7 @@ def verify_target(outdir: Path, target: str) -> dict:
             raise NnikError(f"{target}: {exc}") from None
 
     kernels, mismatches = {}, 0
-    alt = other_kernel(im.kernel)
-    alt_im = quantize_kernel(TrainedModel.load(outdir / MODEL_FILE), ds, alt)
+    alt = alt_im.kernel
     _, alt_want, alt_flags = alt_im.run(vec)
     runs = [(im.kernel, opt, c_dir, want, want_flags) for opt in TARGET_OPTS[target]]
     runs.append((alt, TARGET_OPTS[target][0], c_dir / alt, alt_want, alt_flags))
