@@ -3,28 +3,42 @@
 from __future__ import annotations
 
 import math
-import re
 import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 
 from nnik.actuator import SCHEMAS as ACTUATOR_SCHEMAS
 from nnik.actuator import Actuator
+from nnik.c_text import c_name_problem
 from nnik.errors import NnikError
 from nnik.kinematics import KINDS, Mechanism, Workspace
 from nnik.params import Param, positive, validate_table
-
-
-def _c_identifier(v):
-    return None if re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]{0,40}", v) else f"must be a C identifier, got {v!r}"
 
 
 def _at_least(n):
     return lambda v: None if v >= n else f"must be >= {n}, got {v}"
 
 
+def _between(lo, hi):
+    return lambda v: None if lo <= v <= hi else f"must be in [{lo}, {hi}], got {v}"
+
+
+MAX_POINTS = 2_000_000  # per split: float64 positions, targets and activations stay within RAM
+MAX_SEED = 2**32 - 1  # numpy, scipy and torch all take it
+MAX_WIDTH, MAX_DEPTH = 256, 4  # an 8-bit MCU runs nothing wider, and range analysis stays exact
+TRAIN_MEMORY_BYTES = 4 * 2**30  # the training tensors' estimated peak must stay below this
+
+
+def _hidden(v):
+    if len(v) > MAX_DEPTH:
+        return f"at most {MAX_DEPTH} hidden layers, got {len(v)}"
+    if max(v) > MAX_WIDTH:
+        return f"hidden layers of at most {MAX_WIDTH} neurons, got {max(v)}"
+    return None
+
+
 TOP = {
-    "name": Param("str", required=True, check=_c_identifier, doc="prefixes generated symbols and the output dir"),
+    "name": Param("str", required=True, check=c_name_problem, doc="prefixes generated symbols and the output dir"),
     "description": Param("str", default=""),
     "mechanism": Param("table", required=True),
     "actuator": Param("table", required=True),
@@ -33,26 +47,27 @@ TOP = {
     "network": Param("table", default={}),
     "training": Param("table", default={}),
     "export": Param("table", default={}),
+    "target": Param("table", default={}),
 }
 WORKSPACE = {"x_mm": Param("range", required=True), "y_mm": Param("range", required=True)}
 DATASET = {
-    "n_train": Param("int", default=1000, check=_at_least(10)),
-    "n_val": Param("int", default=0, check=_at_least(0), doc="0 = n_train / 4 (at least 200)"),
-    "n_test": Param("int", default=20000, check=_at_least(10)),
+    "n_train": Param("int", default=1000, check=_between(10, MAX_POINTS)),
+    "n_val": Param("int", default=0, check=_between(0, MAX_POINTS), doc="0 = n_train / 4 (at least 200)"),
+    "n_test": Param("int", default=20000, check=_between(10, MAX_POINTS)),
     "sampling": Param("str", default="sobol", choices=("sobol", "uniform", "grid")),
-    "seed": Param("int", default=0, check=_at_least(0)),
+    "seed": Param("int", default=0, check=_between(0, MAX_SEED)),
 }
 NETWORK = {
-    "hidden": Param("intlist", default=(6,), doc="hidden tanh layer sizes"),
+    "hidden": Param("intlist", default=(6,), check=_hidden, doc="hidden tanh layer sizes"),
     "mode": Param("str", default="full", choices=("full", "residual")),
     "normalize": Param("bool", default=True, doc="normalise inputs to [-1, 1] (seed 004's fix)"),
 }
 TRAINING = {
     "max_seconds": Param("float", default=60.0, check=positive, doc="wall-clock budget"),
-    "adam_steps": Param("int", default=3000, check=_at_least(0)),
+    "adam_steps": Param("int", default=3000, check=_between(0, 1_000_000)),
     "adam_lr": Param("float", default=0.01, check=positive),
-    "lbfgs_rounds": Param("int", default=400, check=_at_least(0), doc="L-BFGS outer iterations"),
-    "restarts": Param("int", default=3, check=_at_least(1), doc="independent initialisations; best kept"),
+    "lbfgs_rounds": Param("int", default=400, check=_between(0, 100_000), doc="L-BFGS outer iterations"),
+    "restarts": Param("int", default=3, check=_between(1, 100), doc="independent initialisations; best kept"),
     "patience": Param("int", default=40, check=_at_least(1), doc="rounds without validation gain"),
 }
 
@@ -62,7 +77,33 @@ EXPORT = {
     "lut_bytes": Param("int", default=0, check=_at_least(0), doc="LUT baseline flash budget; 0 = the MLP's bytes"),
     "kernel": Param("str", default="fast", choices=("fast", "portable"),
                     doc="fast: hardware-multiply asm on AVR/PIC18 (portable C elsewhere); portable: plain C"),
+    "input_unit_um": Param("float", default=1.0, check=lambda v: None if 0.001 <= v <= 1000 else
+                           f"must be in [0.001, 1000] um, got {v}",
+                           doc="the C's input unit in micrometres (e.g. 0.25 for a 16-bit DAC galvo)"),
 }
+TARGET = {
+    "chip": Param("str", default="avr", choices=("avr", "pic18"), doc="the chip the pick is cheapest on"),
+    "max_error": Param("float", default=0.25, check=positive,
+                       doc="pre-rounding max |error| in output units on the dense check grid"),
+    "max_cycles": Param("float", check=positive, doc="optional limit on measured cycles per call"),
+    "max_flash_bytes": Param("int", check=lambda v: None if v > 0 else f"must be > 0, got {v}",
+                             doc="optional limit on the model's flash bytes"),
+}
+
+
+def training_memory_bytes(n_rows: int, n_val: int, n_test: int, hidden: tuple[int, ...]) -> int:
+    """Estimated peak of the training tensors: every layer's float64 activations, their tanh and
+    their gradients over the full batch (train and validation), plus the test-set prediction."""
+    width = 4 + sum(hidden)
+    return 8 * (4 * (n_rows + n_val) * width + 2 * n_test * width)
+
+
+def _check_training_memory(mechanism, dataset: dict, network: dict, source: str) -> None:
+    n_rows = len(mechanism.positions_mm) if not mechanism.analytic else dataset["n_train"]
+    need = training_memory_bytes(n_rows, dataset["n_val"], dataset["n_test"], network["hidden"])
+    if need > TRAIN_MEMORY_BYTES:
+        raise NnikError(f"training would need about {need / 2**30:.1f} GiB (limit {TRAIN_MEMORY_BYTES / 2**30:.0f} GiB); "
+                        f"use fewer training points or smaller hidden layers", source, "[network] hidden")
 
 
 @dataclass
@@ -78,6 +119,7 @@ class Scenario:
     network: dict
     training: dict
     export: dict
+    target: dict
 
     @property
     def outputs(self) -> list[str]:
@@ -96,7 +138,7 @@ class Scenario:
         act_raw = top["actuator"]
         if not isinstance(act_raw, dict) or "kind" not in act_raw:
             raise NnikError("missing required key", source, "[actuator] kind")
-        if act_raw["kind"] not in ACTUATOR_SCHEMAS:
+        if not isinstance(act_raw["kind"], str) or act_raw["kind"] not in ACTUATOR_SCHEMAS:
             raise NnikError(f"must be one of {', '.join(ACTUATOR_SCHEMAS)}; got {act_raw['kind']!r}", source, "[actuator] kind")
         act = validate_table(act_raw, ACTUATOR_SCHEMAS[act_raw["kind"]], source, "actuator", act_raw["kind"])
         actuator = Actuator.from_params(act)
@@ -105,7 +147,7 @@ class Scenario:
         if not isinstance(mech_raw, dict) or "kind" not in mech_raw:
             raise NnikError("missing required key", source, "[mechanism] kind")
         kind = mech_raw["kind"]
-        if kind not in KINDS:
+        if not isinstance(kind, str) or kind not in KINDS:
             raise NnikError(f"must be one of {', '.join(KINDS)}; got {kind!r}", source, "[mechanism] kind")
         cls_ = KINDS[kind]
         schema = {"kind": Param("str", required=True), **cls_.PARAMS}
@@ -122,17 +164,24 @@ class Scenario:
         if cls_.family == "measured":
             mech["csv"] = str((base_dir / mech["csv"]).resolve())
         mechanism = cls_(mech, workspace, source)
+        if cls_.family == "belt":  # before Newton meets an absurd scale (mm_per_rev = 1e-9)
+            affine = mechanism.affine_inverse(workspace.boundary()) - mechanism.q_rest
+            actuator.check_range(actuator.to_units(affine), source)
         mechanism.check_reach()
         if mechanism.analytic:
             units = actuator.to_units(mechanism.inverse(workspace.boundary()) - mechanism.q_rest)
             actuator.check_range(units, source)
+        else:
+            actuator.check_range(mechanism.commands, str(mechanism.csv_path), "q1/q2 columns", "the rows command")
 
         dataset = validate_table(top["dataset"], DATASET, source, "dataset")
         if dataset["n_val"] == 0:
             dataset["n_val"] = max(200, dataset["n_train"] // 4)
         network = validate_table(top["network"], NETWORK, source, "network")
+        _check_training_memory(mechanism, dataset, network, source)
         training = validate_table(top["training"], TRAINING, source, "training")
         export = validate_table(top["export"], EXPORT, source, "export")
+        target = validate_table(top["target"], TARGET, source, "target")
         if export["tanh"] != "default":
             from nnik.activations import VARIANTS
 
@@ -150,6 +199,7 @@ class Scenario:
             network=network,
             training=training,
             export=export,
+            target=target,
         )
 
 

@@ -1,0 +1,21 @@
+"""Accuracy of an implementation's integer model on the problem's check set, in output units."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from nnik.implementations.base import Implementation
+
+
+def accuracy(impl: Implementation) -> dict:
+    """Pre-rounding and delivered error against the exact IK (or held-out rows) on the dense
+    check grid: ``pre_max_abs``/``rms`` per output, ``pre_max`` (worst output), delivered max."""
+    pts, truth = impl.problem.check
+    r = impl.run(pts)
+    err = r.pre - truth
+    d = r.out - truth
+    return {"points": int(len(pts)),
+            "pre_max_abs": np.abs(err).max(0).tolist(),
+            "pre_max": float(np.abs(err).max()),
+            "rms": np.sqrt((err**2).mean(0)).tolist(),
+            "delivered_max_abs": np.abs(d).max(0).tolist()}
