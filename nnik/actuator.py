@@ -21,6 +21,7 @@ DAC = {
     "optical_range_deg": Param("float", default=40.0, check=positive, doc="full-scale optical swing"),
 }
 SCHEMAS = {"stepper": STEPPER, "dac": DAC}
+MAX_UNITS = 2.0**30  # commands the int32 outputs of the generated C carry with headroom
 
 
 @dataclass(frozen=True)
@@ -48,17 +49,22 @@ class Actuator:
     def from_units(self, u: np.ndarray) -> np.ndarray:
         return u / self.units_per_rad
 
-    def check_range(self, units: np.ndarray, source: str) -> None:
+    def check_range(self, units: np.ndarray, source: str, key: str = "[workspace]",
+                    needs: str = "workspace needs") -> None:
+        """Raise NnikError if commands (actuator units) leave the DAC's codes or int32 headroom."""
+        worst = float(np.abs(units).max())
         if self.code_range is None:
+            if worst > MAX_UNITS:
+                raise NnikError(f"{needs} {worst:.3g} {self.unit}s, beyond the int32 range of the generated C "
+                                f"(|q| <= 2^30); check mm_per_rev, the pulley radii and the microsteps", source, key)
             return
         lo, hi = self.code_range
-        worst = np.abs(units).max()
         if units.min() < lo - 0.5 or units.max() > hi + 0.5:
             raise NnikError(
-                f"workspace needs DAC code {worst:.0f}, beyond the {self.params['bits']}-bit range "
+                f"{needs} DAC code {worst:.0f}, beyond the {self.params['bits']}-bit range "
                 f"[{lo}, {hi}] over {self.params['optical_range_deg']:g} deg optical",
                 source,
-                "[workspace]",
+                key,
             )
 
     def describe(self) -> str:

@@ -55,14 +55,29 @@ class Dataset:
 
     @classmethod
     def load(cls, path: Path) -> "Dataset":
+        src = str(path)
         if not Path(path).is_file():
-            raise NnikError("dataset not found (run `nnik generate` first)", str(path))
-        with np.load(path) as z:
-            return cls(
-                p={s: z[f"p_{s}"] for s in SPLITS},
-                q={s: z[f"q_{s}"] for s in SPLITS},
-                meta=json.loads(str(z["meta"])),
-            )
+            raise NnikError("dataset not found (run `nnik generate` first)", src)
+        try:
+            with np.load(path, allow_pickle=False) as z:
+                p = {s: np.asarray(z[f"p_{s}"]) for s in SPLITS}
+                q = {s: np.asarray(z[f"q_{s}"]) for s in SPLITS}
+                meta = json.loads(str(z["meta"]))
+        except Exception as exc:  # truncated, random or foreign file: zipfile, KeyError, ValueError, EOFError
+            raise NnikError(f"not a readable nnik dataset ({type(exc).__name__}); run `nnik generate` again",
+                            src) from None
+        if not isinstance(meta, dict):
+            raise NnikError("not an nnik dataset (its metadata is not a JSON object)", src)
+        for s in SPLITS:
+            for k, a in (("p", p[s]), ("q", q[s])):
+                if a.ndim != 2 or a.shape[1] != 2 or len(a) == 0 or a.dtype.kind != "f":
+                    raise NnikError(f"{k}_{s} has shape {a.shape} and dtype {a.dtype}; expected (N, 2) floats", src)
+                if not np.all(np.isfinite(a)):
+                    raise NnikError(f"{k}_{s} holds NaN or infinite values in {int((~np.isfinite(a)).any(1).sum())} rows",
+                                    src)
+            if len(p[s]) != len(q[s]):
+                raise NnikError(f"p_{s} has {len(p[s])} rows but q_{s} has {len(q[s])}", src)
+        return cls(p=p, q=q, meta=meta)
 
 
 def build_dataset(scn: Scenario) -> Dataset:
@@ -97,7 +112,8 @@ def _split_measured(scn: Scenario, seed: int) -> Dataset:
     p = {s: m.positions_mm[i] for s, i in idx.items()}
     q = {s: m.commands[i] for s, i in idx.items()}
     meta = {"scenario": scn.name, "source": scn.source, "unit": scn.unit, "outputs": scn.outputs,
-            "sampling": "measured rows", "seed": seed, "truth": f"held-out rows of {m.csv_path.name}"}
+            "sampling": "measured rows", "seed": seed, "truth": f"held-out rows of {m.csv_path.name}",
+            "duplicates_merged": int(m.duplicates_merged)}
     return Dataset(p, q, meta)
 
 

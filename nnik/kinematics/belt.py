@@ -36,6 +36,7 @@ DISTORTION = {
 }
 NONLINEAR_KEYS = ("bow_mm", "stretch", "racking_deg", "eccentricity_mm")
 
+MAX_SKEW_DEG = 45.0  # axes further from perpendicular make a near-singular, not a skewed, machine
 NEWTON_TOL_MM = 1e-10
 NEWTON_MAX_ITER = 40
 
@@ -53,10 +54,12 @@ class BeltMechanism(Mechanism):
         self.dist = validate_table(params.get("distortion") or {}, DISTORTION, source, "mechanism.distortion")
         a, b = np.radians(self.dist["A_deg"]), np.radians(self.dist["B_deg"])
         self.frame = np.array([[np.cos(b), np.cos(a)], [np.sin(b), np.sin(a)]])
-        if abs(np.linalg.det(self.frame)) < 1e-3:
+        between = abs(float(np.degrees(np.arcsin(np.clip(np.linalg.det(self.frame), -1.0, 1.0)))))
+        if between < 90.0 - MAX_SKEW_DEG:
             raise NnikError(
-                f"non-invertible distortion: A_deg={self.dist['A_deg']:g} and B_deg={self.dist['B_deg']:g} "
-                "make the X and Y axes (nearly) parallel",
+                f"non-invertible or near-singular frame: A_deg={self.dist['A_deg']:g} and B_deg={self.dist['B_deg']:g} "
+                f"put the X and Y axes {between:.2f} deg from parallel; they must be within {MAX_SKEW_DEG:g} deg "
+                "of perpendicular",
                 source,
                 "[mechanism.distortion]",
             )
@@ -117,7 +120,11 @@ class BeltMechanism(Mechanism):
                 dq[j] = h
                 cols.append((self.forward(q + dq) - self.forward(q - dq)) / (2 * h))
             jac = np.stack(cols, 2)  # (N, 2 outputs, 2 joints)
-            q = q - np.linalg.solve(jac, r[:, :, None])[:, :, 0]
+            try:
+                q = q - np.linalg.solve(jac, r[:, :, None])[:, :, 0]
+            except np.linalg.LinAlgError:
+                raise NnikError("Newton inverse met a singular Jacobian; the machine's scale or distortion "
+                                "cannot be inverted", self.source, "[mechanism]") from None
         worst = np.abs(self.forward(q) - p).max(1).argmax()
         raise NnikError(
             f"Newton inverse did not converge to {NEWTON_TOL_MM:g} mm near x={p[worst, 0]:.3f}, "

@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from nnik.kinematics.base import Mechanism, as_points
-from nnik.kinematics.galvo_gimbal import MAX_MECH
+from nnik.kinematics.galvo_gimbal import MAX_MECH, check_incidence
 from nnik.params import Param, non_negative, positive
 
 
@@ -40,4 +40,5 @@ class GalvoDual(Mechanism):
         return np.stack([(d / np.cos(py) + e) * np.tan(px), d * np.tan(py)], 1)
 
     def check_reach(self):
+        check_incidence(self, self.params["d_mm"], "d_mm")
         self.check_swing(self.params["max_mech_deg"])

@@ -11,12 +11,32 @@ from __future__ import annotations
 
 import numpy as np
 
+from nnik.errors import NnikError
 from nnik.kinematics.base import Mechanism, as_points
 from nnik.params import Param, positive
 
 
 def _mech_limit(v):
     return None if 0 < v <= 45 else f"must be in (0, 45] degrees, got {v}"
+
+
+MAX_INCIDENCE_DEG = 75.0  # beyond this the beam grazes the plane: the IK's slope grows without bound
+
+
+def check_incidence(mech, distance_mm: float, key: str) -> None:
+    """Reject a galvo whose beam meets the plane near grazing incidence somewhere in the
+    workspace: there the IK is near its singularity (distance -> 0), a few micrometres swing the
+    mirror by degrees, and no small network or table follows it."""
+    ws = mech.workspace
+    far = max(np.hypot(x, y) for x in ws.x_mm for y in ws.y_mm)
+    incidence = float(np.degrees(np.arctan2(far, distance_mm)))
+    if incidence > MAX_INCIDENCE_DEG:
+        raise NnikError(
+            f"near-singular geometry: the beam meets the plane {incidence:.2f} deg from its normal at the "
+            f"workspace's far corner (at most {MAX_INCIDENCE_DEG:g}); increase {key} or shrink [workspace]",
+            mech.source,
+            f"[mechanism] {key}",
+        )
 
 
 MAX_MECH = Param("float", default=45.0, check=_mech_limit, doc="largest mirror swing from rest, mechanical deg")
@@ -51,4 +71,5 @@ class GalvoGimbal(Mechanism):
         return np.stack([d * np.cos(b2), d * np.sin(a2) * np.sin(b2)], 1)
 
     def check_reach(self):
+        check_incidence(self, self.params["z_mm"], "z_mm")
         self.check_swing(self.params["max_mech_deg"])

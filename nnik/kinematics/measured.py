@@ -7,6 +7,7 @@ that produced it). There is no analytic model; the test split is held-out rows.
 from __future__ import annotations
 
 import csv
+import io
 from pathlib import Path
 
 import numpy as np
@@ -17,6 +18,18 @@ from nnik.params import Param
 
 COLUMNS = ("x_um", "y_um", "q1", "q2")
 MIN_ROWS = 20
+COVERAGE_GRID = 4  # every cell of a 4 x 4 grid over [workspace] must hold measured rows
+MAX_FIELD = 100  # characters in one CSV field; a number never needs more
+
+
+def _read_text(path: Path) -> str:
+    raw = path.read_bytes()
+    try:
+        return raw.decode("utf-8-sig")  # a UTF-8 byte-order mark (Excel writes one) is accepted
+    except UnicodeDecodeError as exc:
+        line = raw[:exc.start].count(b"\n") + 1
+        raise NnikError(f"not UTF-8 text: byte 0x{raw[exc.start]:02x} at offset {exc.start} "
+                        "(save the CSV as UTF-8 or plain ASCII)", str(path), f"line {line}") from None
 
 
 def read_measurements(path: Path) -> tuple[np.ndarray, np.ndarray]:
@@ -24,29 +37,68 @@ def read_measurements(path: Path) -> tuple[np.ndarray, np.ndarray]:
     src = str(path)
     if not path.is_file():
         raise NnikError("file not found", src)
-    with open(path, newline="") as fh:
-        rows = list(csv.reader(fh))
-    rows = [r for r in rows if r and not (len(r) == 1 and not r[0].strip())]
+    reader = csv.reader(io.StringIO(_read_text(path), newline=""))
+    rows = []
+    try:
+        for row in reader:
+            if row and not (len(row) == 1 and not row[0].strip()):
+                if any(len(v) > MAX_FIELD for v in row):
+                    raise NnikError(f"a field of {max(map(len, row))} characters (a number needs at most {MAX_FIELD})",
+                                    src, f"line {reader.line_num}")
+                rows.append((reader.line_num, row))
+    except csv.Error as exc:
+        raise NnikError(f"malformed CSV ({exc})", src, f"line {reader.line_num}") from None
     if not rows:
         raise NnikError("empty CSV (expected a header x_um,y_um,q1,q2 and data rows)", src)
-    header = tuple(c.strip() for c in rows[0])
+    header = tuple(c.strip() for c in rows[0][1])
     if header != COLUMNS:
-        raise NnikError(f"header must be {','.join(COLUMNS)}, got {','.join(header)}", src, "line 1")
-    data = []
-    for lineno, row in enumerate(rows[1:], start=2):
+        shown = ",".join(header).encode("ascii", "backslashreplace").decode()
+        raise NnikError(f"header must be {','.join(COLUMNS)}, got {shown}", src, "line 1")
+    data = np.empty((len(rows) - 1, len(COLUMNS)))
+    for k, (lineno, row) in enumerate(rows[1:]):
         if len(row) != len(COLUMNS):
             raise NnikError(f"expected {len(COLUMNS)} values, got {len(row)}", src, f"line {lineno}")
         try:
-            vals = [float(v) for v in row]
+            data[k] = [float(v) for v in row]
         except ValueError:
             raise NnikError(f"not a number in {row!r}", src, f"line {lineno}") from None
-        if not np.all(np.isfinite(vals)):
+        if not np.all(np.isfinite(data[k])):
             raise NnikError(f"NaN or infinite value in {row!r}", src, f"line {lineno}")
-        data.append(vals)
     if len(data) < MIN_ROWS:
         raise NnikError(f"only {len(data)} data rows; need at least {MIN_ROWS}", src)
-    a = np.array(data)
-    return a[:, :2] / 1000.0, a[:, 2:]
+    return data[:, :2] / 1000.0, data[:, 2:]
+
+
+def merge_duplicates(p_mm: np.ndarray, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, int]:
+    """One row per distinct position (commands averaged), so that no position sits in both the
+    training and the held-out rows. Returns (positions, commands, rows merged away)."""
+    uniq, first, inverse = np.unique(p_mm, axis=0, return_index=True, return_inverse=True)
+    if len(uniq) == len(p_mm):
+        return p_mm, q, 0
+    rank = np.empty(len(uniq), dtype=np.int64)
+    rank[np.argsort(first)] = np.arange(len(uniq))  # keep the file's order of first appearance
+    group = rank[inverse.reshape(-1)]
+    counts = np.bincount(group, minlength=len(uniq)).astype(np.float64)
+    qm = np.stack([np.bincount(group, weights=q[:, j], minlength=len(uniq)) for j in range(q.shape[1])], 1)
+    return p_mm[np.sort(first)], qm / counts[:, None], len(p_mm) - len(uniq)
+
+
+def check_coverage(p_mm: np.ndarray, lo: np.ndarray, hi: np.ndarray, src: str) -> None:
+    """Every cell of a coarse grid over the workspace must hold rows: a model fitted to a corner
+    or a line of the workspace says nothing about the rest of it."""
+    g = COVERAGE_GRID
+    cell = np.clip(((p_mm - lo) / (hi - lo) * g).astype(np.int64), 0, g - 1)
+    filled = np.zeros((g, g), dtype=bool)
+    filled[cell[:, 1], cell[:, 0]] = True
+    if not filled.all():
+        empty = [(ix, iy) for iy in range(g) for ix in range(g) if not filled[iy, ix]]
+        x0, y0 = lo + (hi - lo) * np.array(empty[0]) / g
+        raise NnikError(
+            f"the rows do not cover [workspace]: {len(empty)} of {g * g} cells of a {g}x{g} grid hold no "
+            f"distinct measured position (the first from x={x0:g}, y={y0:g} mm); measure the whole "
+            "workspace or shrink [workspace] to the data",
+            src,
+        )
 
 
 class Measured(Mechanism):
@@ -58,16 +110,20 @@ class Measured(Mechanism):
     def __init__(self, params, workspace, source="<scenario>"):
         super().__init__(params, workspace, source)
         self.csv_path = Path(params["csv"])
-        self.positions_mm, self.commands = read_measurements(self.csv_path)
+        p_mm, q = read_measurements(self.csv_path)
         lo, hi = workspace.lo, workspace.hi
-        outside = np.any((self.positions_mm < lo - 1e-9) | (self.positions_mm > hi + 1e-9), axis=1)
+        outside = np.any((p_mm < lo - 1e-9) | (p_mm > hi + 1e-9), axis=1)
         if outside.any():
             i = int(np.argmax(outside))
             raise NnikError(
-                f"row {i + 1} at ({self.positions_mm[i, 0]:.3f}, {self.positions_mm[i, 1]:.3f}) mm lies "
-                "outside [workspace]",
+                f"row {i + 1} at ({p_mm[i, 0]:.3f}, {p_mm[i, 1]:.3f}) mm lies outside [workspace]",
                 str(self.csv_path),
             )
+        self.positions_mm, self.commands, self.duplicates_merged = merge_duplicates(p_mm, q)
+        if len(self.positions_mm) < MIN_ROWS:
+            raise NnikError(f"only {len(self.positions_mm)} distinct positions in {len(p_mm)} rows; need at least "
+                            f"{MIN_ROWS}", str(self.csv_path))
+        check_coverage(self.positions_mm, lo, hi, str(self.csv_path))
 
     def forward(self, q):
         raise NnikError("a measured mechanism has no analytic forward model", self.source, "[mechanism] kind")
