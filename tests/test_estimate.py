@@ -10,20 +10,19 @@ import itertools
 import json
 import os
 import shutil
-from pathlib import Path
 
 import numpy as np
 import pytest
 
-from nnik import estimate as est
 from nnik.errors import NnikError
+from nnik.estimate import calibrations, kernels, predict, synthetic, trace, validity
 
 BUILTIN = ("avr-gcc-Os", "avr-gcc-O2", "pic18-sdcc")
 
 
 def _net(hidden, tanh="lerp_mr4", seed=3, kernel=None, scenario="galvo"):
-    spec = est.CalSpec(scenario, tuple(hidden), tanh=tanh, seed=seed, gain=1.5)
-    return est.synthetic_model(spec, kernel=kernel)
+    spec = synthetic.CalSpec(scenario, tuple(hidden), tanh=tanh, seed=seed, gain=1.5)
+    return synthetic.synthetic_model(spec, kernel=kernel)
 
 
 @pytest.fixture(scope="module")
@@ -32,11 +31,11 @@ def nets():
 
 
 def test_calibration_files_load_and_cover_every_profile():
-    names = est.profiles()
+    names = calibrations.profiles()
     for p in BUILTIN:
         assert p in names
-        cal = est.load_calibration(p)
-        assert cal["profile"] == p and cal["target"] == est.BUILTIN_PROFILES[p]["target"]
+        cal = calibrations.load_calibration(p)
+        assert cal["profile"] == p and cal["target"] == calibrations.BUILTIN_PROFILES[p]["target"]
         for key in ("compiler", "flags", "date", "command", "codegen_hash", "shift_tables", "kernels"):
             assert key in cal, (p, key)
         assert cal["command"].startswith("python3 -m nnik.estimate calibrate --target ")
@@ -47,41 +46,41 @@ def test_calibration_files_load_and_cover_every_profile():
             # every calibration network stays outside the judged hidden sizes 4..16
             for m in kc["models"]:
                 assert not any(4 <= h <= 16 for h in m["shape"][1:-1]), m["spec"]
-        portable = cal["kernels"].get("portable") or cal["kernels"].get(est.DEFAULT_KERNEL_KEY)
+        portable = cal["kernels"].get("portable") or cal["kernels"].get(calibrations.DEFAULT_KERNEL_KEY)
         assert portable is not None
         from nnik import activations
 
         for v in activations.VARIANTS:
             assert f"tanh[{v}]" in portable["cycles"]["coef"], (p, v)
-    assert set(est.profiles("avr")) >= {"avr-gcc-Os", "avr-gcc-O2"}
-    assert "pic18-sdcc" in est.profiles("pic18")
+    assert set(calibrations.profiles("avr")) >= {"avr-gcc-Os", "avr-gcc-O2"}
+    assert "pic18-sdcc" in calibrations.profiles("pic18")
 
 
 def test_estimate_keys_and_units(nets):
     im = nets[(8,)]
-    for target in est.TARGETS:
-        e = est.estimate(im, target)
+    for target in calibrations.TARGETS:
+        e = predict.estimate(im, target)
         for k in ("cycles", "us", "flash_bytes", "ram_bytes", "profile", "validated", "breakdown"):
             assert k in e
-        assert e["profile"] == est.DEFAULT_PROFILE[target]
+        assert e["profile"] == calibrations.DEFAULT_PROFILE[target]
         assert e["cycles"] > 0 and e["flash_bytes"] > 0 and e["ram_bytes"] >= 0
         assert isinstance(e["validated"], bool)
         assert sum(e["breakdown"].values()) == pytest.approx(e["cycles"], abs=1.0)
-        cpc = est.CLOCKS_PER_CYCLE[target]
+        cpc = calibrations.CLOCKS_PER_CYCLE[target]
         assert e["us"] == pytest.approx(e["cycles"] * cpc / 16e6 * 1e6)
-        e8 = est.estimate(im, target, clock_hz=8_000_000)
+        e8 = predict.estimate(im, target, clock_hz=8_000_000)
         assert e8["us"] == pytest.approx(2 * e["us"])
 
 
 def test_estimate_grows_with_hidden_size_and_a_second_layer(nets):
     for prof in BUILTIN:
-        target = est.BUILTIN_PROFILES[prof]["target"]
-        cyc = [est.estimate(nets[(h,)], target, prof)["cycles"] for h in (4, 6, 8, 12, 16)]
+        target = calibrations.BUILTIN_PROFILES[prof]["target"]
+        cyc = [predict.estimate(nets[(h,)], target, prof)["cycles"] for h in (4, 6, 8, 12, 16)]
         assert all(b > a for a, b in itertools.pairwise(cyc)), (prof, cyc)
-        fl = [est.estimate(nets[(h,)], target, prof)["flash_bytes"] for h in (4, 6, 8, 12, 16)]
+        fl = [predict.estimate(nets[(h,)], target, prof)["flash_bytes"] for h in (4, 6, 8, 12, 16)]
         assert all(b > a for a, b in itertools.pairwise(fl)), (prof, fl)
-        two = est.estimate(nets[(8, 8)], target, prof)
-        one = est.estimate(nets[(8,)], target, prof)
+        two = predict.estimate(nets[(8, 8)], target, prof)
+        one = predict.estimate(nets[(8,)], target, prof)
         assert two["cycles"] > one["cycles"] and two["flash_bytes"] > one["flash_bytes"]
 
 
@@ -90,60 +89,60 @@ def test_flash_grows_by_about_two_bytes_per_int16_weight(nets):
     # one more neuron: n_in + n_out int16 weights and one int32 bias
     added_weights = (a.shape[0] + a.shape[-1])
     for prof in BUILTIN:
-        target = est.BUILTIN_PROFILES[prof]["target"]
-        d = est.estimate(b, target, prof)["flash_bytes"] - est.estimate(a, target, prof)["flash_bytes"]
+        target = calibrations.BUILTIN_PROFILES[prof]["target"]
+        d = predict.estimate(b, target, prof)["flash_bytes"] - predict.estimate(a, target, prof)["flash_bytes"]
         assert d == pytest.approx(2 * added_weights + 4, abs=3), (prof, d)
-        kc = est.load_calibration(prof)["kernels"]
-        portable = kc.get("portable") or kc[est.DEFAULT_KERNEL_KEY]
+        kc = calibrations.load_calibration(prof)["kernels"]
+        portable = kc.get("portable") or kc[calibrations.DEFAULT_KERNEL_KEY]
         assert portable["flash"]["coef"]["table_bytes"] == pytest.approx(1.0, abs=0.1)
 
 
 def test_unknown_target_or_profile_is_a_clear_nnik_error(nets):
     im = nets[(4,)]
     with pytest.raises(NnikError, match=r"unknown target 'arm'.*avr, pic18"):
-        est.estimate(im, "arm")
+        predict.estimate(im, "arm")
     with pytest.raises(NnikError, match=r"unknown profile 'O3' for target 'avr'.*avr-gcc-Os"):
-        est.estimate(im, "avr", "O3")
+        predict.estimate(im, "avr", "O3")
     with pytest.raises(NnikError, match=r"unknown profile 'sdcc' for target 'avr'"):
-        est.estimate(im, "avr", "sdcc")
+        predict.estimate(im, "avr", "sdcc")
     with pytest.raises(NnikError, match="clock_hz"):
-        est.estimate(im, "avr", clock_hz=0)
+        predict.estimate(im, "avr", clock_hz=0)
 
 
 def test_profile_spellings():
-    assert est.resolve_profile("avr", None) == "avr-gcc-Os"
-    assert est.resolve_profile("avr", "O2") == "avr-gcc-O2"
-    assert est.resolve_profile("avr", "-O2") == "avr-gcc-O2"
-    assert est.resolve_profile("avr", "avr-gcc-Os") == "avr-gcc-Os"
-    assert est.resolve_profile("pic18", "sdcc") == "pic18-sdcc"
+    assert calibrations.resolve_profile("avr", None) == "avr-gcc-Os"
+    assert calibrations.resolve_profile("avr", "O2") == "avr-gcc-O2"
+    assert calibrations.resolve_profile("avr", "-O2") == "avr-gcc-O2"
+    assert calibrations.resolve_profile("avr", "avr-gcc-Os") == "avr-gcc-Os"
+    assert calibrations.resolve_profile("pic18", "sdcc") == "pic18-sdcc"
 
 
 def test_feature_trace_matches_the_integer_model(nets):
     """The estimator's own walk through the data path ends where IntegerModel's does."""
     im = nets[(8, 8)]
-    pts = est.typical_inputs(im, n=300)
+    pts = trace.typical_inputs(im, n=300)
     h, _, _ = im.forward_hidden(pts)
-    tr = est._hidden_trace(im, pts)
+    tr = trace.hidden_trace(im, pts)
     assert np.array_equal(tr.h, h)
 
 
 def test_calibration_networks_avoid_the_judged_sizes():
-    for kern in est.kernel_options():
-        for sp in est.calibration_specs(kern):
+    for kern in kernels.kernel_options():
+        for sp in synthetic.calibration_specs(kern):
             assert not any(4 <= h <= 16 for h in sp.hidden), sp.label
 
 
 def test_validated_flag_and_notes(nets):
-    e = est.estimate(nets[(8,)], "avr")
-    cal = est.load_calibration("avr-gcc-Os")
-    kc = cal["kernels"][est._kernel_key(est.model_kernel(nets[(8,)]))]
+    e = predict.estimate(nets[(8,)], "avr")
+    cal = calibrations.load_calibration("avr-gcc-Os")
+    kc = cal["kernels"][kernels.kernel_key(kernels.model_kernel(nets[(8,)]))]
     if e["validated"]:  # only with an unchanged generator and a recorded, passing sweep
-        assert kc["codegen_hash"] == est.codegen_hash(kc["kernel"])
+        assert kc["codegen_hash"] == validity.codegen_hash(kc["kernel"])
         assert any("recorded sweep" in n for n in e["notes"])
     else:
         assert e["notes"]
     deep = _net((5, 5, 5))
-    e3 = est.estimate(deep, "avr")
+    e3 = predict.estimate(deep, "avr")
     assert e3["validated"] is False and any("two hidden layers" in n for n in e3["notes"])
 
 
@@ -160,10 +159,10 @@ def test_held_out_2_10_2_within_3_percent_on_avr_os(tmp_path):
     from nnik.targets import run_on_target
 
     im = _net((10,), seed=11)
-    csrc = est.write_c(im, tmp_path / "c")
-    vec = est.in_domain_vectors(im, 60, seed=5)
+    csrc = kernels.write_c(im, tmp_path / "c")
+    vec = synthetic.in_domain_vectors(im, 60, seed=5)
     r = run_on_target("avr", [csrc], [csrc.parent], im.name, vec, opt="-Os", workdir=tmp_path / "w", progress=False)
-    e = est.estimate(im, "avr", "avr-gcc-Os")
+    e = predict.estimate(im, "avr", "avr-gcc-Os")
     err = abs(e["cycles"] - r["cycles_mean"]) / r["cycles_mean"]
     assert err <= 0.03, (e["cycles"], r["cycles_mean"])
     assert abs(e["flash_bytes"] - r["model_flash_bytes"]) / r["model_flash_bytes"] <= 0.05
@@ -175,7 +174,7 @@ def test_calibration_matches_the_current_generator():
     kernel source changes, re-run `python3 -m nnik.estimate calibrate --target avr|pic18`."""
     for kernel in ("portable", "fast"):
         for target, profile in (("avr", "avr-gcc-Os"), ("avr", "avr-gcc-O2"), ("pic18", "pic18-sdcc")):
-            cal = json.loads((Path(est.__file__).parent / "calibration" / f"{profile}.json").read_text())
+            cal = json.loads((calibrations.CAL_DIR / f"{profile}.json").read_text())
             kc = cal["kernels"].get(kernel)
             assert kc is not None, (profile, kernel)
-            assert kc.get("codegen_hash", cal.get("codegen_hash")) == est.codegen_hash(kernel), (profile, kernel)
+            assert kc.get("codegen_hash", cal.get("codegen_hash")) == validity.codegen_hash(kernel), (profile, kernel)

@@ -1,0 +1,148 @@
+"""Calibration, a developer tool: microbenchmarks on the simulators, fitted into
+nnik/calibration/<profile>.json (``python3 -m nnik.estimate calibrate``)."""
+
+from __future__ import annotations
+
+import datetime
+import json
+import sys
+import time
+from collections.abc import Sequence
+from pathlib import Path
+
+from nnik.errors import NnikError
+from nnik.estimate.fit import fit_measurements
+from nnik.estimate.kernels import kernel_key, kernel_options
+from nnik.estimate.measure import measure_kernel, measure_shift_tables
+from nnik.estimate.calibrations import (BUILTIN_PROFILES, CAL_DIR, CALIBRATION_FORMAT, DEFAULT_PROFILE, REPO_ROOT,
+                                    cal_path, forget_loaded, resolve_profile)
+from nnik.estimate.trace import TYPICAL_N, TYPICAL_SEED
+from nnik.estimate.validity import codegen_hash
+
+CAL_WORK_DIR = REPO_ROOT / "build" / "estimator_calibration"
+
+
+def calibrate(target: str, profile: str | None = None, *, kernels: Sequence[str | None] | None = None,
+              workdir: Path | None = None, write: bool = True, verbose: bool = True, refit: bool = False) -> dict:
+    """Run the microbenchmarks for one profile (default: the target's default profile) and write
+    nnik/calibration/<profile>.json.  Returns the calibration dict.
+
+    refit=True re-fits the measurements kept by the last run under build/estimator_calibration
+    (no simulator; for work on the cost model itself)."""
+    from nnik.targets import available
+    from nnik.targets.toolchain import tool_version
+
+    prof = resolve_profile(target, profile)
+    if prof not in BUILTIN_PROFILES:
+        raise NnikError(f"profile {prof!r} cannot be calibrated here (no simulator for it)")
+    ok, why = available(target)
+    if not ok and not refit:
+        raise NnikError(f"cannot calibrate {prof}: {why}")
+    t0 = time.perf_counter()
+    p = BUILTIN_PROFILES[prof]
+    wd = Path(workdir or CAL_WORK_DIR) / prof
+    say = (lambda m: print(m, file=sys.stderr, flush=True)) if verbose else (lambda m: None)
+    kernels = list(kernels) if kernels is not None else kernel_options()
+    tables = None
+    if not refit:
+        say(f"[{prof}] shift microbenchmark")
+        tables = measure_shift_tables(prof, wd)
+    out_kernels = {}
+    compiler, flags = "", ""
+    for kern in kernels:
+        kkey = kernel_key(kern)
+        try:
+            if refit:
+                out_kernels[kkey], compiler, flags, tables = _refit_kernel(prof, kern, wd, say)
+                continue
+            tk = time.perf_counter()
+            out_kernels[kkey], compiler, flags = _calibrate_kernel(prof, kern, tables, wd, say)
+            out_kernels[kkey]["seconds"] = round(time.perf_counter() - tk, 1)
+        except NnikError as exc:
+            if len(kernels) == 1:
+                raise
+            say(f"[{prof}/{kkey}] skipped: {exc}")
+    if not out_kernels:
+        raise NnikError(f"{prof}: no kernel could be calibrated")
+    seconds = time.perf_counter() - t0
+    prev: dict = {}
+    if cal_path(prof).is_file():
+        try:
+            prev = json.loads(cal_path(prof).read_text())
+        except (OSError, json.JSONDecodeError):
+            prev = {}
+    for kkey, kc in out_kernels.items():
+        if refit and kkey in prev.get("kernels", {}):
+            kc["codegen_hash"] = prev["kernels"][kkey].get("codegen_hash")  # that of the measurements
+        kc.setdefault("codegen_hash", codegen_hash(kc["kernel"]))
+        if refit and kkey in prev.get("kernels", {}):
+            kc["seconds"] = prev["kernels"][kkey].get("seconds")
+            kc["date"] = prev["kernels"][kkey].get("date")
+        else:
+            kc["date"] = datetime.datetime.now(datetime.UTC).strftime("%Y-%m-%dT%H:%M:%SZ")
+    if prev.get("format") == CALIBRATION_FORMAT:  # keep the kernels this run did not calibrate
+        for kkey, kc in prev.get("kernels", {}).items():
+            out_kernels.setdefault(kkey, kc)
+    cal = {
+        "format": CALIBRATION_FORMAT,
+        "profile": prof,
+        "target": p["target"],
+        "description": p["description"],
+        "compiler": compiler or tool_version(p["compiler"] if p["compiler"] != "avr-gcc" else "avr-gcc"),
+        "flags": flags,
+        "validated": True,
+        "date": datetime.datetime.now(datetime.UTC).strftime("%Y-%m-%dT%H:%M:%SZ"),
+        "command": f"python3 -m nnik.estimate calibrate --target {p['target']}" + (
+            f" --profile {prof}" if prof != DEFAULT_PROFILE[p["target"]] else ""),
+        "seconds": round(seconds, 1) if not refit else prev.get("seconds"),
+        "codegen_hash": codegen_hash(),
+        "typical_inputs": f"{TYPICAL_N} uniform points of the trained domain (seed {TYPICAL_SEED})",
+        "shift_tables": tables,
+        "kernels": out_kernels,
+    }
+    if write:
+        old = cal_path(prof)
+        if prev.get("validation") and (refit or prev.get("codegen_hash") == cal["codegen_hash"]):
+            cal["validation"] = prev["validation"]
+        CAL_DIR.mkdir(parents=True, exist_ok=True)
+        old.write_text(json.dumps(cal, indent=1) + "\n")
+        forget_loaded()
+        say(f"[{prof}] wrote {old} in {seconds:.0f} s")
+    return cal
+
+
+def _refit_kernel(prof: str, kern: str | None, wd: Path, say) -> tuple[dict, str, str, dict]:
+    import pickle
+
+    path = wd / kernel_key(kern) / "measurements.pkl"
+    if not path.is_file():
+        raise NnikError(f"no stored measurements for {prof}/{kernel_key(kern)} (run calibrate without --refit)",
+                        str(path))
+    blob = pickle.loads(path.read_bytes())
+    result = fit_measurements(blob["meas"], blob["tables"], kern)
+    cf = result["cycles"]["fit"]
+    say(f"[{prof}/{kernel_key(kern)}] refit: cycles max {cf['max_rel_error_pct']:.2f} % of a network's mean")
+    return result, blob["meas"][0]["compiler"], blob["meas"][0]["flags"], blob["tables"]
+
+
+def _calibrate_kernel(prof: str, kern: str | None, tables: dict, wd: Path, say) -> tuple[dict, str, str]:
+    """Measure every calibration network with one kernel and fit cycles, flash and RAM."""
+    import pickle
+
+    kkey = kernel_key(kern)
+    h0 = codegen_hash(kern)
+    meas = measure_kernel(prof, kern, wd, say)
+    if codegen_hash(kern) != h0:
+        raise NnikError(f"{prof}/{kkey}: the code generator changed during the calibration; run it again")
+    try:  # kept for refits while developing the cost model (build/, not package data)
+        (wd / kkey).mkdir(parents=True, exist_ok=True)
+        (wd / kkey / "measurements.pkl").write_bytes(pickle.dumps({"meas": meas, "tables": tables}))
+    except (OSError, pickle.PicklingError):
+        pass
+    result = fit_measurements(meas, tables, kern)
+    result["codegen_hash"] = h0
+    cf, ff, rf = result["cycles"]["fit"], result["flash"]["fit"], result["ram"]["fit"]
+    say(f"[{prof}/{kkey}] fit: cycles max residual {cf['max_abs_residual']:.1f} "
+        f"(max {cf['max_rel_error_pct']:.2f} % of a network's mean), flash max "
+        f"{ff['max_abs_residual']:.1f} B, RAM max {rf['max_abs_residual']:.1f} B")
+    return result, meas[0]["compiler"], meas[0]["flags"]

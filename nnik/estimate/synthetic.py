@@ -1,0 +1,181 @@
+"""Synthetic networks of the calibration: random weights of a given shape and format knobs,
+quantised by the real quantiser (so their C is the current generator's)."""
+
+from __future__ import annotations
+
+import copy
+import dataclasses
+import functools
+import tomllib
+from dataclasses import dataclass
+
+import numpy as np
+
+from nnik.errors import NnikError
+from nnik.estimate.kernels import accepts
+from nnik.estimate.calibrations import REPO_ROOT
+
+DATASETS = REPO_ROOT / "datasets"
+
+
+@dataclass(frozen=True)
+class CalSpec:
+    """One synthetic calibration network: scenario family, hidden sizes, tanh, format knobs."""
+
+    scenario: str  # galvo (full, stepper) | galvo_small (K = 0) | corexy (residual) | dual (residual + DAC)
+    hidden: tuple[int, ...]
+    tanh: str = "lerp_mr4"
+    n_out: int = 2
+    weight_bits: int = 16
+    seed: int = 0
+    gain: float = 2.5  # std of the pre-activations' weights (x 1/sqrt(fan-in))
+    out_scale: float = 1.0  # output-weight scale: moves the output Q formats
+    n_vec: int = 24
+    sparsity: float = 0.0  # fraction of zero weights (unrolled kernels skip them: MACs apart from neurons)
+
+    @property
+    def label(self) -> str:
+        return (f"{self.scenario}:2-{'-'.join(map(str, self.hidden))}-{self.n_out}:{self.tanh}:w{self.weight_bits}"
+                f":s{self.seed}:g{self.gain:g}:o{self.out_scale:g}" + (f":z{self.sparsity:g}" if self.sparsity else ""))
+
+
+_SCENARIO_FILES = {"galvo": "galvo_cba2012", "galvo_small": "galvo_cba2012", "corexy": "corexy_nonlinear",
+                   "dual": "galvo_dual_xy2"}
+JUDGED_SIZES = range(4, 17)
+
+
+def calibration_specs(kernel: str | None = None) -> list[CalSpec]:
+    """The calibration set: hidden sizes outside 4-16 only (those are what the sweep judges).
+    For the fast kernel the structural networks use its own tanh tables (tanh="")."""
+    from nnik import activations
+
+    base = "lerp_mr4" if "lerp_mr4" in activations.VARIANTS else activations.DEFAULT_VARIANT
+    fast = kernel == "fast"
+    S = CalSpec
+    specs = [
+        # structure: call, MACs per layer type, neurons (n_in = n_out = 2, as every nnik network)
+        S("galvo", (3,)), S("galvo", (17,), seed=1), S("galvo", (20,), seed=2), S("galvo", (3,), seed=3),
+        S("galvo", (19,), seed=4, n_vec=12), S("galvo", (24,), seed=5, n_vec=12),
+        S("galvo", (17, 3), seed=6), S("galvo", (3, 17), seed=7), S("galvo", (18, 18), seed=8, n_vec=12),
+        S("galvo", (3, 3), seed=9), S("galvo", (3, 20), seed=10), S("galvo", (20, 3), seed=11),
+        # formats: tanh clamp on/off, output shift signs
+        S("galvo", (17,), seed=12, gain=0.6), S("galvo", (3,), seed=13, gain=7.0), S("galvo", (3, 3), seed=14, gain=0.7),
+        S("galvo", (17,), seed=15, out_scale=0.01), S("galvo", (3,), seed=16, out_scale=60.0),
+        S("galvo", (18,), seed=17, out_scale=0.003), S("galvo", (3, 17), seed=18, out_scale=40.0),
+        S("galvo", (20,), seed=31, gain=7.0), S("galvo", (3,), seed=32, out_scale=0.005),
+        # hidden-to-hidden weight tables of 128 bytes and more (a different index computation on SDCC)
+        S("galvo", (3, 24), seed=46), S("galvo", (24, 3), seed=47), S("galvo", (3, 22), seed=48, gain=0.8),
+        # input stage without the pre-shift (K = 0)
+        S("galvo_small", (3,), seed=19), S("galvo_small", (17, 3), seed=20), S("galvo_small", (18,), seed=33),
+        S("galvo_small", (3, 3), seed=34),
+        # residual (affine base), with and without the DAC clamp
+        S("corexy", (3,), seed=21), S("corexy", (17,), seed=22), S("corexy", (3, 17), seed=23),
+        S("corexy", (20,), seed=35), S("corexy", (3, 3), seed=36), S("corexy", (17, 3), seed=37),
+        S("dual", (3,), seed=24), S("dual", (17,), seed=25), S("dual", (18, 3), seed=26),
+        S("dual", (20,), seed=38), S("dual", (3, 3), seed=39), S("dual", (3, 18), seed=40),
+        # int8 weights
+        S("galvo", (3,), weight_bits=8, seed=27), S("galvo", (17,), weight_bits=8, seed=28),
+        S("galvo", (3, 17), weight_bits=8, seed=29), S("galvo", (20, 3), weight_bits=8, seed=30),
+        S("galvo", (3, 3), weight_bits=8, seed=41),
+    ]
+    specs = [dataclasses.replace(sp, tanh="" if fast else base) for sp in specs]
+    if fast:
+        # looped hidden-to-hidden layers (more than UNROLL_MAX_WEIGHTS weights); small weights, as
+        # trained networks have, select the finer tanh tables (fewer integer bits of T)
+        specs += [S("galvo", (17, 17), seed=42, n_vec=12, tanh=""), S("galvo", (20, 18), seed=43, n_vec=12, tanh="")]
+        for i, g in enumerate((1.0, 0.6, 0.35)):
+            specs += [S("galvo", (3,), seed=60 + i, tanh="", gain=g), S("galvo", (20,), seed=63 + i, tanh="", gain=g),
+                      S("galvo", (3, 3), seed=66 + i, tanh="", gain=g), S("galvo", (17, 3), seed=69 + i, tanh="", gain=g),
+                      S("galvo", (3, 17), seed=72 + i, tanh="", gain=g), S("galvo", (20, 20), seed=75 + i, tanh="",
+                                                                           gain=g, n_vec=8),
+                      S("corexy", (3, 3), seed=78 + i, tanh="", gain=g), S("galvo", (3, 24), seed=81 + i, tanh="", gain=g)]
+        # zero weights are skipped: sparse networks separate the cost of a MAC from that of a neuron
+        for i, (z, g) in enumerate(((0.5, 1.0), (0.3, 0.5), (0.7, 2.0))):
+            specs += [S("galvo", (3, 20), seed=90 + i, tanh="", gain=g, sparsity=z),
+                      S("galvo", (20, 3), seed=93 + i, tanh="", gain=g, sparsity=z),
+                      S("galvo", (3, 24), seed=96 + i, tanh="", gain=g, sparsity=z),
+                      S("galvo", (3, 3), seed=102 + i, tanh="", gain=g, sparsity=z)]
+    # every tanh variant: one and two hidden layers, pre-activations spread over all its regions
+    for k, name in enumerate(activations.VARIANTS):
+        if fast:  # a portable variant inside the fast kernel (its C path): the two basic shapes
+            specs += [S("galvo", (17,), tanh=name, seed=100 + k, gain=3.0, n_vec=40),
+                      S("galvo", (3, 3), tanh=name, seed=200 + k, gain=3.0, n_vec=40)]
+            continue
+        specs += [S("galvo", (17,), tanh=name, seed=100 + k, gain=3.0, n_vec=40),
+                  S("galvo", (3, 3), tanh=name, seed=200 + k, gain=3.0, n_vec=40)]
+        if name != base:
+            specs.append(S("galvo", (3,), tanh=name, seed=300 + k, gain=3.0, n_vec=40))
+        # large shifts (small weights): the inlined tanh's unreachable branches disappear
+        specs += [S("galvo", (3,), tanh=name, seed=400 + 10 * k + i, gain=g, n_vec=6)
+                  for i, g in enumerate((0.5, 0.25, 0.12, 0.06))]
+    for sp in specs:
+        if any(h in JUDGED_SIZES for h in sp.hidden):
+            raise AssertionError(f"calibration network {sp.label} overlaps the judged sizes 4-16")
+    return specs
+
+
+@functools.cache
+def _scenario(family: str):
+    from nnik.scenario import Scenario
+
+    path = DATASETS / f"{_SCENARIO_FILES[family]}.toml"
+    raw = tomllib.loads(path.read_text())
+    if family == "galvo_small":
+        raw["workspace"] = {"x_mm": [-30.0, 30.0], "y_mm": [-30.0, 30.0]}
+        raw["name"] = "galvo_small"
+    return Scenario.from_dict(raw, str(path), path.parent.resolve())
+
+
+def synthetic_model(spec: CalSpec, kernel: str | None = None):
+    """An IntegerModel with random weights of the given shape and format knobs (quantised by
+    the real nnik.fixedpoint.quantize, so it is a valid model of the current generator)."""
+    import torch
+
+    from nnik import fixedpoint as fx
+    from nnik.data import Dataset, exact_targets, sample_points
+    from nnik.train import MLP, TrainedModel, make_scaling
+
+    scn = copy.deepcopy(_scenario(spec.scenario))
+    scn.network["hidden"] = tuple(spec.hidden)
+    p = sample_points(scn.workspace, 256, "uniform", spec.seed)
+    q = exact_targets(scn, p)
+    ds = Dataset({"train": p, "val": p, "test": p}, {"train": q, "val": q, "test": q})
+    sc = make_scaling(scn, ds, True)
+    if spec.n_out != q.shape[1]:
+        idx = np.arange(spec.n_out) % q.shape[1]
+        sc = dataclasses.replace(sc, out_mean=sc.out_mean[idx], out_std=sc.out_std[idx],
+                                 base_coef=sc.base_coef[idx], base_intercept=sc.base_intercept[idx])
+    last_err = None
+    for attempt in range(8):
+        rng = np.random.default_rng(1000 * spec.seed + attempt)
+        net = MLP(2, tuple(spec.hidden), spec.n_out)
+        lins = [m for m in net.net if isinstance(m, torch.nn.Linear)]
+        with torch.no_grad():
+            for m in lins[:-1]:
+                fan = m.weight.shape[1]
+                m.weight.copy_(torch.from_numpy(rng.normal(0, spec.gain / np.sqrt(fan), tuple(m.weight.shape))))
+                m.bias.copy_(torch.from_numpy(rng.normal(0, 0.5 * min(1.0, spec.gain), tuple(m.bias.shape))))
+            m = lins[-1]
+            m.weight.copy_(torch.from_numpy(spec.out_scale * rng.normal(0, 1 / np.sqrt(m.weight.shape[1]),
+                                                                        tuple(m.weight.shape))))
+            if spec.sparsity:  # hidden-to-hidden layers only; every neuron keeps an input and an output
+                for m in lins[1:-1]:
+                    keep = rng.random(tuple(m.weight.shape)) >= spec.sparsity
+                    r, c = keep.shape
+                    keep[np.arange(r), rng.integers(0, c, r)] = True
+                    keep[rng.integers(0, r, c), np.arange(c)] = True
+                    m.weight.mul_(torch.from_numpy(keep.astype(np.float64)))
+            m.bias.copy_(torch.from_numpy(rng.normal(0, 0.3, tuple(m.bias.shape))))
+        tm = TrainedModel(net, sc, scn)
+        kw = {"kernel": kernel} if kernel is not None and accepts(fx.quantize, "kernel") else {}
+        try:
+            return fx.quantize(tm, tanh_variant=spec.tanh or None, weight_bits=spec.weight_bits, refit=False, **kw)
+        except NnikError as exc:  # a random draw that overflows a format: draw again
+            last_err = exc
+    raise NnikError(f"calibration network {spec.label}: {last_err}")
+
+
+def in_domain_vectors(im, n: int, seed: int) -> np.ndarray:
+    rng = np.random.default_rng(seed)
+    lo, hi = np.asarray(im.inp.lo), np.asarray(im.inp.hi)
+    return np.stack([rng.integers(lo[j], hi[j] + 1, n) for j in range(len(lo))], 1).astype(np.int64)
