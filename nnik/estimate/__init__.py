@@ -44,7 +44,8 @@ Commands (run from the repository root):
 
 ``--record`` stores the sweep's worst errors (per profile, kernel and number of hidden layers)
 in the calibration files; an estimate is ``validated`` only when its calibration matches the
-current code generator (hash of the templates and kernel sources), the network is inside the
+C the generator emits today (nnik.estimate.validity: a hash of the C of fixed reference models, so a
+refactor that emits the same C keeps it), the network is inside the
 calibrated shapes, and a recorded sweep of the same kind met the goals (3 % cycles, 5 % flash).
 The breakdown splits cycles by primitive; primitives that always occur together (e.g. a
 neuron and its two layer-1 MACs) are split by the least-squares solution, only sums are exact.

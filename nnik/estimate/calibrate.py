@@ -17,7 +17,7 @@ from nnik.estimate.measure import measure_kernel, measure_shift_tables
 from nnik.estimate.calibrations import (BUILTIN_PROFILES, CAL_DIR, CALIBRATION_FORMAT, DEFAULT_PROFILE, REPO_ROOT,
                                     cal_path, forget_loaded, resolve_profile)
 from nnik.estimate.trace import TYPICAL_N, TYPICAL_SEED
-from nnik.estimate.validity import codegen_hash
+from nnik.estimate.validity import reference_c_hash, stored_hash
 
 CAL_WORK_DIR = REPO_ROOT / "build" / "estimator_calibration"
 
@@ -73,8 +73,8 @@ def calibrate(target: str, profile: str | None = None, *, kernels: Sequence[str 
             prev = {}
     for kkey, kc in out_kernels.items():
         if refit and kkey in prev.get("kernels", {}):
-            kc["codegen_hash"] = prev["kernels"][kkey].get("codegen_hash")  # that of the measurements
-        kc.setdefault("codegen_hash", codegen_hash(kc["kernel"]))
+            kc["reference_c_hash"] = stored_hash(prev, kkey)  # that of the measurements
+        kc.setdefault("reference_c_hash", reference_c_hash(kc["kernel"]))
         if refit and kkey in prev.get("kernels", {}):
             kc["seconds"] = prev["kernels"][kkey].get("seconds")
             kc["date"] = prev["kernels"][kkey].get("date")
@@ -95,15 +95,19 @@ def calibrate(target: str, profile: str | None = None, *, kernels: Sequence[str 
         "command": f"python3 -m nnik.estimate calibrate --target {p['target']}" + (
             f" --profile {prof}" if prof != DEFAULT_PROFILE[p["target"]] else ""),
         "seconds": round(seconds, 1) if not refit else prev.get("seconds"),
-        "codegen_hash": codegen_hash(),
+        "validity": "an estimate is validated while kernels/*/reference_c_hash equals the hash of the C emitted "
+                    "today for the reference models (nnik.estimate.validity)",
         "typical_inputs": f"{TYPICAL_N} uniform points of the trained domain (seed {TYPICAL_SEED})",
         "shift_tables": tables,
         "kernels": out_kernels,
     }
     if write:
         old = cal_path(prof)
-        if prev.get("validation") and (refit or prev.get("codegen_hash") == cal["codegen_hash"]):
-            cal["validation"] = prev["validation"]
+        # a recorded sweep still stands for the kernels whose emitted C is unchanged
+        kept = {k: v for k, v in (prev.get("validation") or {}).items()
+                if k in out_kernels and (refit or stored_hash(prev, k) == stored_hash(cal, k))}
+        if kept:
+            cal["validation"] = kept
         CAL_DIR.mkdir(parents=True, exist_ok=True)
         old.write_text(json.dumps(cal, indent=1) + "\n")
         forget_loaded()
@@ -130,9 +134,10 @@ def _calibrate_kernel(prof: str, kern: str | None, tables: dict, wd: Path, say) 
     import pickle
 
     kkey = kernel_key(kern)
-    h0 = codegen_hash(kern)
+    h0 = reference_c_hash(kern)
     meas = measure_kernel(prof, kern, wd, say)
-    if codegen_hash(kern) != h0:
+    reference_c_hash.cache_clear()
+    if reference_c_hash(kern) != h0:
         raise NnikError(f"{prof}/{kkey}: the code generator changed during the calibration; run it again")
     try:  # kept for refits while developing the cost model (build/, not package data)
         (wd / kkey).mkdir(parents=True, exist_ok=True)
@@ -140,7 +145,7 @@ def _calibrate_kernel(prof: str, kern: str | None, tables: dict, wd: Path, say) 
     except (OSError, pickle.PicklingError):
         pass
     result = fit_measurements(meas, tables, kern)
-    result["codegen_hash"] = h0
+    result["reference_c_hash"] = h0
     cf, ff, rf = result["cycles"]["fit"], result["flash"]["fit"], result["ram"]["fit"]
     say(f"[{prof}/{kkey}] fit: cycles max residual {cf['max_abs_residual']:.1f} "
         f"(max {cf['max_rel_error_pct']:.2f} % of a network's mean), flash max "

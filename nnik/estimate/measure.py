@@ -12,7 +12,7 @@ from nnik.errors import NnikError
 from nnik.estimate.fast_features import fast_path
 from nnik.estimate.kernels import kernel_key, render_c, write_c
 from nnik.estimate.calibrations import BUILTIN_PROFILES
-from nnik.estimate.shifts import MAX_SHIFT
+from nnik.estimate.shifts import MAX_SHIFT, SHIFT_GROUPS, SHIFTS, shift_bench_c
 from nnik.estimate.synthetic import CalSpec, calibration_specs, in_domain_vectors, synthetic_model
 
 
@@ -70,19 +70,15 @@ def measure_shift_tables(profile: str, workdir: Path) -> dict:
     """Cycles and code bytes of (x + 2^(n-1)) >> n, its int16-narrowed form, x >> n and x * 2^n for
     n = 1..31 (index 0 = no shift = 0), net of the dispatch overhead; the same with the shift
     written as a chain of shifts by at most 8.  Two programs (a PIC18's flash holds one group)."""
-    from nnik.export import environment
-
-    shifts = list(range(1, MAX_SHIFT + 1))
-    groups = (("rs", "rn", "as", "sl"), ("rsc", "rnc", "asc"))
+    shifts = SHIFTS
     tables: dict = {"cycles": {}, "bytes": {}}
     target = BUILTIN_PROFILES[profile]["target"]
-    for gi, kinds in enumerate(groups):
-        name = f"nnik_shiftbench{gi}"
+    for gi, kinds in enumerate(SHIFT_GROUPS):
+        name, text = shift_bench_c(gi)
         nk = len(kinds)
         d = workdir / f"shifts{gi}"
         d.mkdir(parents=True, exist_ok=True)
-        (d / f"{name}.c").write_text(environment().get_template("shift_bench.c.j2").render(
-            name=name, shifts=shifts, kinds=kinds))
+        (d / f"{name}.c").write_text(text)
         rows = [(0, 0x12345)] + [(1 + nk * i + k, x) for i in range(len(shifts)) for k in range(nk)
                                  for x in (0x12345678, -0x0ABCDE)]
         r = run_profile(profile, d / f"{name}.c", name, np.array(rows, dtype=np.int64), 2, d / "w")

@@ -16,7 +16,7 @@ from nnik.estimate.calibrations import (CLOCKS_PER_CYCLE, GOAL_CYCLES_PCT, GOAL_
 from nnik.estimate.shifts import shift_offset
 from nnik.estimate.structure import structure
 from nnik.estimate.trace import typical_inputs
-from nnik.estimate.validity import codegen_hash
+from nnik.estimate.validity import reference_c_hash, stored_hash
 
 
 BREAKDOWN_GROUPS = (
@@ -118,10 +118,10 @@ def estimate(im, target: str, profile: str | None = None, clock_hz: int = 16_000
     validated = bool(cal.get("validated", False))
     if not validated:
         notes.append(f"profile {prof!r} is an extrapolation, not calibrated on a simulator")
-    if kc.get("codegen_hash", cal.get("codegen_hash")) != codegen_hash(kern):
+    if stored_hash(cal, kkey) != reference_c_hash(kern):
         validated = False
-        notes.append("the code generator changed since this calibration: re-run "
-                      f"`python3 -m nnik.estimate calibrate --target {cal['target']}`")
+        notes.append("the emitted C changed since this calibration (the C of its reference models differs): re-run "
+                     f"`python3 -m nnik.estimate calibrate --target {cal['target']}`")
     if s["layers"] > 2:
         validated = False
         notes.append("more than two hidden layers: extrapolated (calibrated on 1-2)")

@@ -5,6 +5,18 @@ from __future__ import annotations
 import numpy as np
 
 MAX_SHIFT = 31
+SHIFTS = tuple(range(1, MAX_SHIFT + 1))
+# the microbenchmark's programs: shift kinds measured together (a PIC18's flash holds one group)
+SHIFT_GROUPS = (("rs", "rn", "as", "sl"), ("rsc", "rnc", "asc"))
+
+
+def shift_bench_c(group: int) -> tuple[str, str]:
+    """(name, C source) of the shift microbenchmark program of one group."""
+    from nnik.templating import environment
+
+    name = f"nnik_shiftbench{group}"
+    return name, environment().get_template("shift_bench.c.j2").render(name=name, shifts=list(SHIFTS),
+                                                                        kinds=SHIFT_GROUPS[group])
 
 
 def _shift_terms(im, style: str = "plain") -> list[tuple[str, str, int, int, int]]:

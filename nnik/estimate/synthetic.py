@@ -159,12 +159,12 @@ def synthetic_model(spec: CalSpec, kernel: str | None = None):
             m.weight.copy_(torch.from_numpy(spec.out_scale * rng.normal(0, 1 / np.sqrt(m.weight.shape[1]),
                                                                         tuple(m.weight.shape))))
             if spec.sparsity:  # hidden-to-hidden layers only; every neuron keeps an input and an output
-                for m in lins[1:-1]:
-                    keep = rng.random(tuple(m.weight.shape)) >= spec.sparsity
+                for hl in lins[1:-1]:
+                    keep = rng.random(tuple(hl.weight.shape)) >= spec.sparsity
                     r, c = keep.shape
                     keep[np.arange(r), rng.integers(0, c, r)] = True
                     keep[rng.integers(0, r, c), np.arange(c)] = True
-                    m.weight.mul_(torch.from_numpy(keep.astype(np.float64)))
+                    hl.weight.mul_(torch.from_numpy(keep.astype(np.float64)))
             m.bias.copy_(torch.from_numpy(rng.normal(0, 0.3, tuple(m.bias.shape))))
         tm = TrainedModel(net, sc, scn)
         kw = {"kernel": kernel} if kernel is not None and accepts(fx.quantize, "kernel") else {}
