@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 import time
+import warnings
 from pathlib import Path
 
 from rich.console import Console
@@ -12,6 +13,7 @@ from rich.table import Table
 
 from nnik import pipeline
 from nnik.errors import NnikError
+from nnik.outdir import check_model_dir, check_outdir
 
 console = Console(highlight=False, width=None if sys.stdout.isatty() else 140)
 
@@ -64,8 +66,45 @@ def print_accuracy(m: dict) -> None:
                       f"{sum(v for k, v in h['saturations'].items() if k != 'outside')}")
 
 
-def _outdir(args, scn) -> Path:
-    return Path(args.outdir) if args.outdir else pipeline.default_outdir(scn, not args.no_normalize)
+def print_selection(m: dict) -> None:
+    """The families table: each family's best point, measured on both chips; the pick marked."""
+    sel = m.get("selection")
+    if not sel:
+        return
+    tg = sel["target"]
+    unit = m["unit"]
+    t = Table(title=f"{m['name']}: every family's best for max_error {tg['max_error']:g} {unit} on {tg['chip']} "
+                    f"(pre-rounding, {sel['check_points']} {sel['check_set']} points)")
+    for col in ("family", "configuration", f"pre max ({unit})", "avr cycles", "pic18 cycles", "avr flash B",
+                "pic18 flash B", "bit-exact host/avr/pic18", "pick"):
+        t.add_column(col, justify="left" if col in ("family", "configuration", "pick") else "right")
+    for r in sel["implementations"]:
+        cyc, fl = r.get("cycles", {}), r.get("flash_bytes", {})
+        checks = [r.get("host") or {}, *[r.get("targets", {}).get(k, {}) for k in ("avr", "pic18")]]
+        ok = "/".join("not run" if "not_run" in c else ("yes" if c.get("bit_exact") else "NO") for c in checks)
+        meets = r["pre_max"] <= tg["max_error"]
+        t.add_row(r["family"], r["describe"], f"{r['pre_max']:.4f}" + ("" if meets else " (misses)"),
+                  *[f"{cyc[k]:.0f}" if cyc.get(k) is not None else "-" for k in ("avr", "pic18")],
+                  *[f"{fl[k]}" if fl.get(k) is not None else "-" for k in ("avr", "pic18")],
+                  ok, "PICK" if r["picked"] else "")
+    console.print(t)
+    pick = sel.get("pick")
+    if pick:
+        console.print(f"pick: {pick['describe']} -> c/{pick['file']} (every family's best in c/alt/<family>/)")
+
+
+def _outdir(args, scn, create: bool = False) -> Path:
+    out = Path(args.outdir) if args.outdir else pipeline.default_outdir(scn, not args.no_normalize)
+    return check_outdir(out, create=create)
+
+
+def _warn_training(model) -> None:
+    """The wall-clock safety net cut training short: the model depends on this machine's load."""
+    stop = getattr(model, "stopped_by", "budget")
+    if stop != "budget":
+        console.print(f"[bold yellow]warning:[/bold yellow] training stopped by the {stop.replace('_', '-')} cap "
+                      f"([training] max_seconds) before its iteration budget; the result depends on machine load "
+                      f"(recorded as training.stopped_by in metrics.json)")
 
 
 def cmd_run(args) -> None:
@@ -73,11 +112,11 @@ def cmd_run(args) -> None:
 
     t0 = time.perf_counter()
     scn = load_scenario(args.scenario)
-    out = _outdir(args, scn)
+    out = _outdir(args, scn, create=True)
     console.print(f"[bold]nnik run[/bold] {scn.source} -> {out}/")
     ds = pipeline.generate(scn, out)
-    console.print(f"generated {', '.join(f'{len(v)} {k}' for k, v in ds.p.items())} points ({scn.dataset['sampling']})")
-    pipeline.train(scn, out, normalize=False if args.no_normalize else None)
+    console.print(f"generated {', '.join(f'{len(v)} {k}' for k, v in ds.p.items())} points ({ds.meta['sampling']})")
+    _warn_training(pipeline.train(scn, out, normalize=False if args.no_normalize else None))
     m = pipeline.evaluate(out)
     if not args.no_normalize:
         console.print(f"exporting C to {out / pipeline.C_DIR}/ and verifying it on the host ...")
@@ -91,6 +130,12 @@ def cmd_run(args) -> None:
                               f"{res['flash_bytes']} B flash, {res['mismatches']} mismatches on {res['points']} vectors")
         m = pipeline.load_metrics(out)
     print_accuracy(m)
+    if not args.no_normalize:
+        console.print("fitting every implementation family, verifying each family's best on host, avr and pic18 ...")
+        try:
+            pipeline.select(out)
+        finally:
+            print_selection(pipeline.load_metrics(out))
     print_report(out)
     console.print(f"done in {time.perf_counter() - t0:.1f} s; metrics: {out / pipeline.METRICS_FILE}")
 
@@ -99,7 +144,7 @@ def cmd_generate(args) -> None:
     from nnik.scenario import load_scenario
 
     scn = load_scenario(args.scenario)
-    out = _outdir(args, scn)
+    out = _outdir(args, scn, create=True)
     ds = pipeline.generate(scn, out)
     console.print(f"wrote {out / pipeline.DATA_FILE}: {', '.join(f'{len(v)} {k}' for k, v in ds.p.items())} points")
 
@@ -110,32 +155,36 @@ def cmd_train(args) -> None:
     scn = load_scenario(args.scenario)
     out = _outdir(args, scn)
     model = pipeline.train(scn, out, normalize=False if args.no_normalize else None)
+    _warn_training(model)
     console.print(f"wrote {out / pipeline.MODEL_FILE} and {out / pipeline.ONNX_FILE} ({model.train_seconds:.1f} s)")
 
 
 def cmd_evaluate(args) -> None:
-    print_accuracy(pipeline.evaluate(Path(args.model_dir)))
+    print_accuracy(pipeline.evaluate(check_model_dir(args.model_dir)))
 
 
 def cmd_export(args) -> None:
-    out = Path(args.model_dir)
+    out = check_model_dir(args.model_dir, pipeline.C_DIR)
     im, _ = pipeline.export(out)
     console.print(f"wrote {out / pipeline.C_DIR}/{im.name}.h and {im.name}.c ({im.weights_bytes()} bytes of tables)")
     print_accuracy(pipeline.load_metrics(out))
 
 
 def cmd_verify(args) -> None:
-    out = Path(args.model_dir)
+    out = check_model_dir(args.model_dir, pipeline.C_DIR)
     res = pipeline.verify(out, args.target)
     print_accuracy(pipeline.load_metrics(out))
     if not res.get("bit_exact", False):
         raise NnikError(f"{args.target}: {res.get('mismatches')} mismatches between the C and the integer model")
+    lut = res.get("baselines", {}).get("lut", {})
+    if lut.get("bit_exact") is False:
+        raise NnikError(f"{args.target}: the LUT baseline's C differs from its integer model in {lut['mismatches']} calls")
 
 
 def cmd_estimate(args) -> None:
     from nnik.estimate import estimate
 
-    out = Path(args.model_dir)
+    out = check_model_dir(args.model_dir)
     model = pipeline.TrainedModel.load(out / pipeline.MODEL_FILE)
     ds = pipeline.Dataset.load(out / pipeline.DATA_FILE)
     im = pipeline.quantize_kernel(model, ds, args.kernel or model.scenario.export["kernel"])
@@ -181,7 +230,7 @@ def print_report(model_dir: Path, out_dir: Path | None = None) -> None:
 
 
 def cmd_report(args) -> None:
-    print_report(Path(args.model_dir), Path(args.outdir) if args.outdir else None)
+    print_report(check_model_dir(args.model_dir), check_outdir(Path(args.outdir)) if args.outdir else None)
 
 
 def cmd_synth_csv(args) -> None:
@@ -243,14 +292,20 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
-    try:
-        args.func(args)
-    except NnikError as exc:
-        print(f"nnik: error: {exc}", file=sys.stderr)
-        return 2
-    except KeyboardInterrupt:
-        print("nnik: interrupted", file=sys.stderr)
-        return 130
+    # numpy's RuntimeWarnings are held back: after an error the one error line is all that shows;
+    # after success they follow the output, one line each, so nothing is lost.
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", RuntimeWarning)
+        try:
+            args.func(args)
+        except NnikError as exc:
+            print(f"nnik: error: {exc}", file=sys.stderr)
+            return 2
+        except KeyboardInterrupt:
+            print("nnik: interrupted", file=sys.stderr)
+            return 130
+    for w in {(str(w.message), w.filename, w.lineno): w for w in caught}.values():
+        print(f"nnik: warning: {w.category.__name__}: {w.message} ({Path(w.filename).name}:{w.lineno})", file=sys.stderr)
     return 0
 
 

@@ -74,6 +74,10 @@ def evaluate(outdir: Path) -> dict:
         "affine_only": error_stats(affine_baseline(ds), q),
         "onnx": {"max_abs_diff": onnx_diff, "tolerance": ONNX_TOLERANCE, "ok": True},
         "train_seconds": model.train_seconds,
+        "training": {"stopped_by": model.stopped_by, "seconds": model.train_seconds,
+                     "max_seconds": scn.training["max_seconds"],
+                     "restarts_run": len({h["restart"] for h in model.history}),
+                     "lbfgs_rounds_run": sum(h["phase"] == "lbfgs" for h in model.history)},
     }
     pos = position_error_um(scn, pred, p)
     if pos is not None:
@@ -86,19 +90,31 @@ def load_metrics(outdir: Path) -> dict:
     path = outdir / METRICS_FILE
     if not path.is_file():
         raise NnikError("no metrics.json (run `nnik evaluate` first)", str(outdir))
-    return json.loads(path.read_text())
+    return _read_metrics(path)
+
+
+def _read_metrics(path: Path) -> dict:
+    try:
+        m = json.loads(path.read_text(encoding="utf-8"))
+    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise NnikError(f"corrupt metrics file ({type(exc).__name__}); run `nnik evaluate` again", str(path)) from None
+    if not isinstance(m, dict):
+        raise NnikError(f"corrupt metrics file (a JSON {type(m).__name__}, not an object); run `nnik evaluate` again",
+                        str(path))
+    return m
 
 
 def write_metrics(outdir: Path, metrics: dict, merge: bool = True) -> None:
     """Write OUTDIR/metrics.json; later steps merge their own sections into it."""
     path = outdir / METRICS_FILE
-    old = json.loads(path.read_text()) if merge and path.is_file() else {}
+    old = _read_metrics(path) if merge and path.is_file() else {}
     old.update(metrics)
     path.write_text(json.dumps(old, indent=2) + "\n")
 
 
 # ---- fixed point: quantise, generate C, verify on the host -----------------------------------
-C_DIR = "c"
+C_DIR = "c"  # the pick (NAME.c), the baselines (NAME_float.c, NAME_lut.c) and alt/<family>/
+MLP_DIR = "c/alt/mlp"  # the scenario's MLP (its kernel), and the other kernel in MLP_DIR/<kernel>/
 FIXED_EVAL_FILE = "fixed_eval.npz"
 
 
@@ -124,8 +140,9 @@ def other_kernel(kernel: str) -> str:
 
 
 def export(outdir: Path):
-    """Quantise model.pt, write OUTDIR/c/NAME.{h,c} (the scenario's kernel) and, for comparison,
-    OUTDIR/c/<other kernel>/NAME.{h,c}; returns both integer models (scenario's kernel first)."""
+    """Quantise model.pt, write OUTDIR/c/alt/mlp/NAME.{h,c} (the scenario's kernel) and, for
+    comparison, OUTDIR/c/alt/mlp/<other kernel>/NAME.{h,c}, and the baselines in OUTDIR/c/;
+    returns both integer models (scenario's kernel first)."""
     from nnik import fixedpoint as fx
     from nnik.export import render_model_c, write_sources
 
@@ -133,9 +150,9 @@ def export(outdir: Path):
     ds = Dataset.load(outdir / DATA_FILE)
     scn = model.scenario
     im = quantize_kernel(model, ds, scn.export["kernel"])
-    write_sources(render_model_c(im, scn.source), outdir / C_DIR)
+    write_sources(render_model_c(im, scn.source), outdir / MLP_DIR)
     alt_im = quantize_kernel(model, ds, other_kernel(im.kernel))
-    write_sources(render_model_c(alt_im, scn.source), outdir / C_DIR / alt_im.kernel)
+    write_sources(render_model_c(alt_im, scn.source), outdir / MLP_DIR / alt_im.kernel)
     in_um = np.rint(ds.p["test"] * 1000).astype(np.int64)
     truth = _truth_for_um(scn, in_um, ds.q["test"])
     baselines = _export_baselines(scn, im, ds, outdir / C_DIR, in_um, truth)
@@ -221,9 +238,9 @@ def verify(outdir: Path, target: str = "host"):
     im, alt_im = export(outdir)  # deterministic: regenerates the same C and integer models
     ds = Dataset.load(outdir / DATA_FILE)
     inputs = verification_inputs(im, ds.p["test"])
-    res = verify_host(im, outdir / C_DIR, inputs)
+    res = verify_host(im, outdir / MLP_DIR, inputs)
     res["other_kernel"] = {"kernel": alt_im.kernel,
-                           **verify_host(alt_im, outdir / C_DIR / alt_im.kernel, {"test": inputs["test"]})}
+                           **verify_host(alt_im, outdir / MLP_DIR / alt_im.kernel, {"test": inputs["test"]})}
     res["bit_exact"] = res["bit_exact"] and res["other_kernel"]["bit_exact"]
     metrics = load_metrics(outdir)
     metrics["host"] = res
@@ -305,13 +322,15 @@ def verify_target(outdir: Path, target: str) -> dict:
     kernels, mismatches = {}, 0
     alt = alt_im.kernel
     _, alt_want, alt_flags = alt_im.run(vec)
-    runs = [(im.kernel, opt, c_dir, want, want_flags) for opt in TARGET_OPTS[target]]
-    runs.append((alt, TARGET_OPTS[target][0], c_dir / alt, alt_want, alt_flags))
+    mlp_dir = outdir / MLP_DIR
+    runs = [(im.kernel, opt, mlp_dir, want, want_flags) for opt in TARGET_OPTS[target]]
+    runs.append((alt, TARGET_OPTS[target][0], mlp_dir / alt, alt_want, alt_flags))
     for kernel, opt, src_dir, w, wf in runs:
         r = run(scn.name, opt, src_dir, kernel)
         bad = np.any(r["outputs"] != w, axis=1) | (r["flags"] != wf)
         mismatches += int(bad.sum())
-        kernels[f"{kernel} {opt}".strip()] = {**_target_row(r, truth, r["outputs"], inside), "mismatches": int(bad.sum())}
+        kernels[f"{kernel} {opt}".strip()] = {**_target_row(r, truth, r["outputs"], inside), "mismatches": int(bad.sum()),
+                                              "bit_exact": not bad.any()}
     main = kernels[f"{im.kernel} {TARGET_OPTS[target][0]}".strip()]
     base = {}
     if metrics["baselines"]["float"]["available"]:
@@ -323,11 +342,57 @@ def verify_target(outdir: Path, target: str) -> dict:
     r = run(f"{scn.name}_lut", TARGET_OPTS[target][0])
     lut_out, lut_flags, _ = bl.lut_int(lut, vec)
     lut_bad = int((np.any(r["outputs"] != lut_out, axis=1) | (r["flags"] != lut_flags)).sum())
-    base["lut"] = {**_target_row(r, truth, r["outputs"], inside), "mismatches": lut_bad}
-    res = {**main, "kernel": im.kernel, "bit_exact": mismatches == 0 and lut_bad == 0, "mismatches": mismatches, "points": int(len(vec)),
+    base["lut"] = {**_target_row(r, truth, r["outputs"], inside), "mismatches": lut_bad, "bit_exact": lut_bad == 0}
+    # each artefact's own row says whether it is bit-exact: the MLP kernels here, the LUT in base
+    res = {**main, "kernel": im.kernel, "bit_exact": mismatches == 0, "mismatches": mismatches, "points": int(len(vec)),
            "clock_hz": 16_000_000, "kernels": kernels, "baselines": base}
     if "cycles" in base["float"]:
         res["speedup_vs_float"] = base["float"]["cycles"] / main["cycles"]
     res["estimate"] = estimate_row(im, target, main)
     write_metrics(outdir, {"targets": {**metrics.get("targets", {}), target: res}})
     return res
+
+
+# ---- every implementation family: fit, verify, pick ---------------------------------------------
+def problem_for(outdir: Path):
+    """The implementation contract for OUTDIR's scenario, with its trained MLP cached in it."""
+    from nnik.implementations import Problem
+    from nnik.implementations.mlp import remember_trained
+
+    model = TrainedModel.load(outdir / MODEL_FILE)
+    ds = Dataset.load(outdir / DATA_FILE)
+    scn = model.scenario
+    problem = Problem(scn, ds, unit_um=scn.export["input_unit_um"])
+    remember_trained(problem, model)
+    return problem
+
+
+def select(outdir: Path, progress: bool = True, families=None) -> dict:
+    """Fit every family's ladder, verify each family's best (host, avr, pic18), export the pick as
+    c/NAME.{c,h} and every family's best as c/alt/<family>/; metrics["implementations"]."""
+    from tqdm import tqdm
+
+    from nnik import selection as sel
+
+    problem = problem_for(outdir)
+    target = problem.scn.target
+    cands = sel.fit_ladder(problem, families, progress=(lambda **k: tqdm(leave=False, **k)) if progress else None)
+    bests = sel.family_bests(cands, target)
+    c_dir = outdir / C_DIR
+    items = list(bests.values())
+    for c in tqdm(items, desc="verify family bests", unit="family", disable=not progress, leave=False):
+        sel.verify_candidate(c, c_dir / sel.ALT_DIR / c.family, (outdir / "targets" / "families").resolve())
+    pick = sel.choose(bests, target)
+    sel.write_choice(c_dir, bests, pick)
+    section = {
+        "target": target, "input_unit_um": problem.unit_um, "check_points": int(len(problem.check[0])),
+        "check_set": "dense grid" if problem.analytic else "held-out rows",
+        "implementations": [c.row(picked=c is pick) for c in bests.values()],
+        "ladder": [c.row() for c in cands],
+        "pick": None if pick is None else {"family": pick.family, "config": pick.config, "describe": pick.impl.describe(),
+                                           "model_hash": pick.impl.source_hash(), "file": f"{problem.name}.c"},
+    }
+    write_metrics(outdir, {"selection": section})
+    if pick is None:
+        raise NnikError(sel.no_pick_reason(cands, bests, target), problem.scn.source, "[target]")
+    return section

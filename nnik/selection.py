@@ -1,0 +1,159 @@
+"""Pick what to flash: fit every implementation family over its ladder, keep the configurations
+that meet ``[target] max_error`` on the dense check grid, verify each family's best on the host
+and on both simulated chips, and pick the cheapest by measured cycles on ``[target] chip`` (flash
+breaks ties) within the optional ``max_cycles`` / ``max_flash_bytes`` limits.
+
+Layout written under OUTDIR/c/: ``NAME.c``/``NAME.h`` is the pick; ``alt/<family>/NAME.{c,h}`` is
+each family's best (the pick's family included), all with the same API ``NAME_ik``.
+"""
+
+from __future__ import annotations
+
+import shutil
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from nnik.errors import NnikError
+from nnik.implementations import FAMILIES, Implementation, Problem
+from nnik.implementations.accuracy import accuracy
+from nnik.implementations.base import TARGETS
+from nnik.implementations.verify import verify_host, verify_on_target
+
+ALT_DIR = "alt"
+
+
+@dataclass
+class Candidate:
+    family: str
+    config: dict
+    impl: Implementation | None = None
+    acc: dict = field(default_factory=dict)
+    est: dict = field(default_factory=dict)  # target -> estimate
+    skipped: str | None = None
+    checks: dict = field(default_factory=dict)  # "host"/"avr"/"pic18" -> verification result
+
+    def meets(self, max_error: float) -> bool:
+        return self.impl is not None and self.acc.get("pre_max", float("inf")) <= max_error
+
+    def row(self, picked: bool = False) -> dict:
+        r = {"family": self.family, "config": self.config, "picked": picked}
+        if self.skipped:
+            return {**r, "skipped": self.skipped}
+        r.update(describe=self.impl.describe(), model_hash=self.impl.source_hash(), model_bytes=self.impl.model_bytes(),
+                 pre_max_abs=self.acc["pre_max_abs"], pre_max=self.acc["pre_max"], rms=self.acc["rms"],
+                 delivered_max_abs=self.acc["delivered_max_abs"], check_points=self.acc["points"],
+                 estimate={t: self.est[t] for t in self.est})
+        if self.checks:
+            r["host"] = self.checks.get("host")
+            r["cycles"] = {t: self.checks[t].get("cycles") for t in TARGETS if t in self.checks}
+            r["flash_bytes"] = {t: self.checks[t].get("flash_bytes") for t in TARGETS if t in self.checks}
+            r["targets"] = {t: self.checks[t] for t in TARGETS if t in self.checks}
+        return r
+
+
+def fit_ladder(problem: Problem, families=None, progress=None) -> list[Candidate]:
+    """Every family's ladder, fitted and measured on the check grid, with cost estimates."""
+    out = []
+    fams = [f for f in (families or FAMILIES)]
+    jobs = [(f, cfg) for f in fams for cfg in FAMILIES[f].ladder(problem)]
+    bar = progress(total=len(jobs), desc="fit families", unit="config") if progress else None
+    for fam, cfg in jobs:
+        c = Candidate(fam, cfg)
+        try:
+            c.impl = FAMILIES[fam].fit(problem, cfg)
+            c.acc = accuracy(c.impl)
+            c.est = {t: c.impl.estimate(t) for t in TARGETS}
+        except NnikError as exc:
+            c.impl, c.skipped = None, str(exc)
+        out.append(c)
+        if bar:
+            bar.update(1)
+            bar.set_postfix_str(f"{fam}: {c.acc.get('pre_max', float('nan')):.3g}" if c.impl else f"{fam}: skipped")
+    if bar:
+        bar.close()
+    return out
+
+
+def family_bests(cands: list[Candidate], target: dict) -> dict[str, Candidate]:
+    """Per family: the cheapest (estimated cycles on the chip, then flash) configuration that meets
+    max_error; if none does, the most accurate one (reported, never picked)."""
+    chip, max_err = target["chip"], target["max_error"]
+    best: dict[str, Candidate] = {}
+    for fam in dict.fromkeys(c.family for c in cands):
+        ok = [c for c in cands if c.family == fam and c.impl is not None]
+        if not ok:
+            continue
+        meet = [c for c in ok if c.meets(max_err)]
+        if meet:
+            best[fam] = min(meet, key=lambda c: (c.est[chip]["cycles"], c.est[chip]["flash_bytes"]))
+        else:
+            best[fam] = min(ok, key=lambda c: c.acc["pre_max"])
+    return best
+
+
+def verify_candidate(c: Candidate, c_dir: Path, work: Path) -> None:
+    """Host (sanitizers) and both simulated chips; results keyed to the C's hash."""
+    c.checks["host"] = verify_host(c.impl, c_dir)
+    for t in TARGETS:
+        c.checks[t] = verify_on_target(c.impl, t, c_dir, work / t / c.family)
+
+
+def _eligible(c: Candidate, target: dict) -> bool:
+    chip = target["chip"]
+    if not c.meets(target["max_error"]):
+        return False
+    res = c.checks.get(chip, {})
+    if "cycles" not in res or not res.get("bit_exact") or not c.checks["host"]["bit_exact"]:
+        return False
+    if not all(c.checks[t].get("bit_exact", True) for t in TARGETS):
+        return False
+    if target.get("max_cycles") and res["cycles"] > target["max_cycles"]:
+        return False
+    if target.get("max_flash_bytes") and res["flash_bytes"] > target["max_flash_bytes"]:
+        return False
+    return True
+
+
+def choose(bests: dict[str, Candidate], target: dict) -> Candidate | None:
+    chip = target["chip"]
+    ok = [c for c in bests.values() if _eligible(c, target)]
+    if not ok:
+        return None
+    return min(ok, key=lambda c: (c.checks[chip]["cycles"], c.checks[chip]["flash_bytes"]))
+
+
+def no_pick_reason(cands: list[Candidate], bests: dict[str, Candidate], target: dict) -> str:
+    fitted = [c for c in cands if c.impl is not None]
+    if not fitted:
+        return "no implementation family could be built: " + "; ".join(f"{c.family}: {c.skipped}" for c in cands)
+    top = min(fitted, key=lambda c: c.acc["pre_max"])
+    unit_err = f"{top.acc['pre_max']:.4g}"
+    if top.acc["pre_max"] > target["max_error"]:
+        return (f"no implementation meets max_error {target['max_error']:g}: the best reached {unit_err} "
+                f"({top.impl.describe()})")
+    limits = {k: target[k] for k in ("max_cycles", "max_flash_bytes") if target.get(k)}
+    meas = ", ".join(f"{c.family} {c.checks.get(target['chip'], {}).get('cycles', float('nan')):.0f} cycles / "
+                     f"{c.checks.get(target['chip'], {}).get('flash_bytes', 0)} B"
+                     for c in bests.values() if c.meets(target["max_error"]))
+    return f"no implementation that meets max_error {target['max_error']:g} fits the limits {limits} on {target['chip']} ({meas})"
+
+
+def write_choice(c_dir: Path, bests: dict[str, Candidate], pick: Candidate | None) -> None:
+    """c/alt/<family>/ for every family's best, c/NAME.{c,h} for the pick (fresh files)."""
+    from nnik.export import write_sources
+
+    alt = c_dir / ALT_DIR
+    for fam, c in bests.items():
+        d = alt / fam
+        if d.exists():
+            for f in d.iterdir():
+                if f.is_file():
+                    f.unlink()
+        write_sources(c.impl.render_c(), d)
+    if pick is not None:
+        for fname, text in pick.impl.render_c().items():
+            (c_dir / fname).write_text(text)
+        src = alt / pick.family
+        for f in src.iterdir():
+            if f.suffix == ".h" and f.name.startswith("nnik_"):
+                shutil.copy(f, c_dir / f.name)
