@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from nnik import fixedpoint as fx
+from nnik import pipeline
 from nnik.data import Dataset
 from nnik.export import render_model_c, write_sources
 from nnik.train import TrainedModel
@@ -32,13 +33,13 @@ def test_host_bit_exact_corexy_residual(corexy_fixed):
 
 
 def test_header_contract(galvo_fixed, galvo_run):
-    h = (galvo_run / "c" / "galvo_cba2012.h").read_text()
+    h = (galvo_run / pipeline.MLP_DIR / "galvo_cba2012.h").read_text()
     for needle in ("#define GALVO_CBA2012_N_IN  2", "#define GALVO_CBA2012_N_OUT 2",
                    "int8_t galvo_cba2012_ik(const int32_t in_um[GALVO_CBA2012_N_IN], int32_t out[GALVO_CBA2012_N_OUT]);",
                    "GALVO_CBA2012_IN0_MIN_UM (-100000L)", "GALVO_CBA2012_IN1_MAX_UM (100000L)",
                    galvo_fixed["fixed"]["model_hash"], '"2-6-2"', '"microstep"', "#ifndef GALVO_CBA2012_H"):
         assert needle in h, needle
-    c = (galvo_run / "c" / "galvo_cba2012.c").read_text()
+    c = (galvo_run / pipeline.MLP_DIR / "galvo_cba2012.c").read_text()
     for banned in ("float", "double", "malloc", "int64_t a", "#include <math.h>"):
         assert banned not in c.split("#ifdef NNIK_INSTRUMENT")[0] or banned == "int64_t a", banned
     assert "NNIK_FLASH" in c
@@ -78,7 +79,7 @@ def test_compiles_warning_free_with_avr_gcc(galvo_fixed, corexy_fixed, galvo_run
     require_tool("avr-gcc")
     for run, name in ((galvo_run, "galvo_cba2012"), (corexy_run, "corexy_nonlinear")):
         r = subprocess.run(["avr-gcc", "-mmcu=atmega328p", opt, "-std=c99", "-Wall", "-Wextra", "-Werror", "-c",
-                            str(run / "c" / f"{name}.c"), "-I", str(run / "c"), "-o", str(tmp_path / f"{name}.o")],
+                            str(run / pipeline.MLP_DIR / f"{name}.c"), "-I", str(run / pipeline.MLP_DIR), "-o", str(tmp_path / f"{name}.o")],
                            capture_output=True, text=True)
         assert r.returncode == 0, r.stderr
 
