@@ -4,7 +4,7 @@ A calibration measured the C of its networks, not the Python that wrote it.  So 
 keyed to the C: ``reference_c_hash(kernel)`` hashes the C emitted today for a fixed set of
 reference models (deterministic synthetic networks: a handful of shapes, every tanh variant,
 residual and DAC outputs, int8 weights, looped and sparse fast layers) together with the runtime
-headers, the simulator harnesses and the shift microbenchmark.  The calibration stores it per
+headers the model's C includes, the simulator harnesses and the shift microbenchmark.  The calibration stores it per
 kernel; an estimate is validated only while the stored and the recomputed hashes agree.  A
 refactor that emits the same C keeps the calibration; any change in the emitted C needs
 ``python3 -m nnik.estimate calibrate`` again.
@@ -15,6 +15,7 @@ from __future__ import annotations
 import dataclasses
 import functools
 import hashlib
+import re
 
 from nnik.estimate.calibrations import REPO_ROOT
 from nnik.estimate.kernels import render_c
@@ -22,8 +23,11 @@ from nnik.estimate.shifts import SHIFT_GROUPS, shift_bench_c
 from nnik.estimate.synthetic import CalSpec, synthetic_model
 
 REFERENCE_SOURCE = "nnik.estimate reference model"
-# C that every measured program contains besides the model (relative to the repository root)
-SHARED_C = ("codegen/runtime", "codegen/harness")
+# what a measured program contains besides the model: the simulator harnesses and the size stub
+# (relative to the repository root), and the runtime headers the model's C includes
+HARNESS_C = ("codegen/harness/avr", "codegen/harness/pic18", "codegen/harness/nnik_stub_model.c")
+RUNTIME = "codegen/runtime"
+_INCLUDE = re.compile(r'^\s*#\s*include\s+"([^"]+)"', re.MULTILINE)
 
 
 def _portable_specs() -> list[CalSpec]:
@@ -65,11 +69,11 @@ def reference_specs(kernel: str | None) -> list[CalSpec]:
     return _fast_specs() if kernel == "fast" else _portable_specs()
 
 
-def _shared_files() -> list[tuple[str, bytes]]:
+def _harness_files() -> list[tuple[str, bytes]]:
     files = []
-    for rel in SHARED_C:
+    for rel in HARNESS_C:
         base = REPO_ROOT / rel
-        for p in sorted(base.rglob("*")):
+        for p in sorted(base.rglob("*")) if base.is_dir() else [base]:
             if p.is_file() and p.suffix in (".c", ".h"):
                 files.append((p.relative_to(REPO_ROOT).as_posix(), p.read_bytes()))
     for group in range(len(SHIFT_GROUPS)):
@@ -78,14 +82,28 @@ def _shared_files() -> list[tuple[str, bytes]]:
     return files
 
 
+def _runtime_headers(texts: list[bytes]) -> list[tuple[str, bytes]]:
+    """The runtime headers the given C includes, directly or through one another, by name."""
+    found: dict[str, bytes] = {}
+    todo = [t.decode(errors="replace") for t in texts]
+    while todo:
+        for name in _INCLUDE.findall(todo.pop()):
+            p = REPO_ROOT / RUNTIME / name
+            if name not in found and p.is_file():
+                found[name] = p.read_bytes()
+                todo.append(found[name].decode(errors="replace"))
+    return [(f"{RUNTIME}/{n}", found[n]) for n in sorted(found)]
+
+
 def reference_c(kernel: str | None) -> list[tuple[str, bytes]]:
     """(name, bytes) of every file the reference hash of a kernel covers, in a fixed order."""
-    files = _shared_files()
+    files = []
     for i, spec in enumerate(reference_specs(kernel)):
         im = synthetic_model(spec, kernel=kernel)
         for fname, text in sorted(render_c(im, REFERENCE_SOURCE, kernel=kernel).items()):
             files.append((f"{i:02d}:{spec.label}:{fname}", text.encode()))
-    return files
+    shared = _harness_files()
+    return shared + _runtime_headers([d for _, d in files + shared]) + files
 
 
 @functools.cache
