@@ -113,8 +113,8 @@ def write_metrics(outdir: Path, metrics: dict, merge: bool = True) -> None:
 
 
 # ---- fixed point: quantise, generate C, verify on the host -----------------------------------
-C_DIR = "c"  # the pick (NAME.c), the baselines (NAME_float.c, NAME_lut.c) and alt/<family>/
-MLP_DIR = "c/alt/mlp"  # the scenario's MLP (its kernel), and the other kernel in MLP_DIR/<kernel>/
+C_DIR = "c"  # the pick (NAME.c), the baselines (NAME_float.c, NAME_lut.c), alt/<family>/ and mlp/
+MLP_DIR = "c/mlp"  # the scenario's MLP pipeline (its kernel), and the other kernel in MLP_DIR/<kernel>/
 FIXED_EVAL_FILE = "fixed_eval.npz"
 
 
@@ -140,8 +140,8 @@ def other_kernel(kernel: str) -> str:
 
 
 def export(outdir: Path):
-    """Quantise model.pt, write OUTDIR/c/alt/mlp/NAME.{h,c} (the scenario's kernel) and, for
-    comparison, OUTDIR/c/alt/mlp/<other kernel>/NAME.{h,c}, and the baselines in OUTDIR/c/;
+    """Quantise model.pt, write OUTDIR/c/mlp/NAME.{h,c} (the scenario's kernel) and, for
+    comparison, OUTDIR/c/mlp/<other kernel>/NAME.{h,c}, and the baselines in OUTDIR/c/;
     returns both integer models (scenario's kernel first)."""
     from nnik import fixedpoint as fx
     from nnik.export import render_model_c, write_sources

@@ -5,7 +5,9 @@ pipeline is kept; this module puts it behind the common interface.
 
 Knobs: ``hidden`` (layer widths), ``mode`` (full | residual), ``kernel`` (fast | portable),
 ``tanh`` (variant, "default" = the kernel's own), ``weight_bits`` (16 | 8).
-The MLP's inputs are integer micrometres, so the family needs ``input_unit_um = 1``.
+With ``input_unit_um = u`` other than 1, the trained model is re-expressed in a coordinate
+system whose "micrometre" is u um (workspace and input scaling divided by u): the integer model
+and its C then take inputs in units of u um, and the network is unchanged.
 """
 
 from __future__ import annotations
@@ -33,6 +35,26 @@ def remember_trained(problem: Problem, model) -> dict:
     return cfg
 
 
+def _in_units(problem: Problem, model):
+    """The model in coordinates where one "micrometre" is one input unit, and its refit set."""
+    from nnik.data import Scaling
+    from nnik.kinematics.base import Workspace
+
+    k = 1.0 / problem.unit_um
+    scn = problem.scn
+    ws = Workspace(tuple(np.asarray(scn.workspace.x_mm) * k), tuple(np.asarray(scn.workspace.y_mm) * k))
+    s = model.scaling
+    scaling = Scaling(s.in_center * k, s.in_half * k, s.out_mean, s.out_std, s.base_coef, s.base_intercept)
+    moved = dataclasses.replace(model, scaling=scaling, scenario=dataclasses.replace(scn, workspace=ws))
+    if problem.analytic:
+        pts, q = problem.fit_samples(121)
+        pts = np.rint(pts)
+        q = problem.truth(pts)
+    else:
+        pts, q = problem.fit_samples()
+    return moved, (pts / 1000.0, q)
+
+
 class MlpImpl(Implementation):
     family = "mlp"
     doc = "tanh MLP, fixed point, fast hardware-multiply kernel or portable C"
@@ -53,8 +75,6 @@ class MlpImpl(Implementation):
     def fit(cls, problem: Problem, config: dict) -> "MlpImpl":
         from nnik import fixedpoint as fx
 
-        if problem.unit_um != 1.0:
-            raise NnikError("the mlp family takes integer micrometre inputs (input_unit_um = 1)")
         key = _model_key(config)
         model = problem.cache.get(key)
         if model is None:
@@ -66,8 +86,11 @@ class MlpImpl(Implementation):
             problem.cache[key] = model
         ds = problem.dataset
         tanh = None if config.get("tanh", "default") == "default" else config["tanh"]
-        im = fx.quantize(model, tanh_variant=tanh, weight_bits=config.get("weight_bits", 16),
-                         calib=fx.calibration_set(model, ds.p["train"], ds.q["train"]),
+        if problem.unit_um == 1.0:
+            q_model, calib = model, fx.calibration_set(model, ds.p["train"], ds.q["train"])
+        else:
+            q_model, calib = _in_units(problem, model)
+        im = fx.quantize(q_model, tanh_variant=tanh, weight_bits=config.get("weight_bits", 16), calib=calib,
                          kernel=config.get("kernel", "fast"))
         return cls(problem, config, model, im)
 
