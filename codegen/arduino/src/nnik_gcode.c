@@ -1,0 +1,474 @@
+/*
+ * nnik_gcode.c - see nnik_gcode.h.  Every rounding here is spelled out because nnik.gcode
+ * (Python) repeats it bit for bit: numbers are parsed to whole micrometres with round half
+ * away from zero, line points are start + floor(d * k / n), arc midpoints are rounded half
+ * away from zero, square roots are floors.
+ */
+#include "nnik_gcode.h"
+#include "nnik_gcode_config.h"
+#include "nnik_flash.h"
+
+#if NNIK_GC_SEG_UM < 100 || NNIK_GC_SEG_UM > 5000
+#error "NNIK_GC_SEG_UM must be 100..5000 um"
+#endif
+#if NNIK_GC_TICK_HZ > 12000
+#error "NNIK_GC_TICK_HZ above 12 kHz overflows the 32-bit tick count"
+#endif
+
+#define POS_LIMIT 268435455L /* 2^28 - 1 um: arc sums stay in int32, products in int64 */
+#define MIN_FEED 1000L       /* um per minute */
+#define ARC_STACK 32
+#define TICKS_PER_UM_MIN (60UL * NNIK_GC_TICK_HZ)
+
+static NNIK_FLASH const char M_LONG[] = "line too long";
+static NNIK_FLASH const char M_COMMENT[] = "unterminated comment";
+static NNIK_FLASH const char M_CHAR[] = "unexpected character";
+static NNIK_FLASH const char M_WORD[] = "unsupported word %c";
+static NNIK_FLASH const char M_BADNUM[] = "bad number after %c";
+static NNIK_FLASH const char M_BIG[] = "number too large after %c";
+static NNIK_FLASH const char M_DEC[] = "too many decimals after %c";
+static NNIK_FLASH const char M_INT[] = "%c needs a whole number";
+static NNIK_FLASH const char M_CMD[] = "unsupported %c%d";
+static NNIK_FLASH const char M_REPEAT[] = "repeated word %c";
+static NNIK_FLASH const char M_TWO[] = "two motion commands";
+static NNIK_FLASH const char M_IJ[] = "I/J need G2 or G3";
+static NNIK_FLASH const char M_ARCIJ[] = "arc needs I or J";
+static NNIK_FLASH const char M_FEED[] = "feed below 1 mm/min";
+static NNIK_FLASH const char M_RANGE[] = "coordinate out of range";
+static NNIK_FLASH const char M_R0[] = "arc radius is zero";
+static NNIK_FLASH const char M_OFF[] = "arc end is off the circle";
+
+/* message = flash template with %c -> ch, %d -> num */
+static int8_t fail(nnik_gc_t *g, const char *tmpl, char ch, int32_t num)
+{
+    uint8_t i = 0, k;
+    char c, digits[11];
+    while ((c = (char)NNIK_RD_U8(tmpl++)) != 0 && i < sizeof g->msg - 12) {
+        if (c != '%') {
+            g->msg[i++] = c;
+            continue;
+        }
+        c = (char)NNIK_RD_U8(tmpl++);
+        if (c == 'c') {
+            g->msg[i++] = ch;
+        } else {
+            uint32_t u = num < 0 ? (uint32_t)0 - (uint32_t)num : (uint32_t)num;
+            if (num < 0)
+                g->msg[i++] = '-';
+            k = 0;
+            do {
+                digits[k++] = (char)('0' + u % 10);
+                u /= 10;
+            } while (u);
+            while (k)
+                g->msg[i++] = digits[--k];
+        }
+    }
+    g->msg[i] = 0;
+    return -1;
+}
+
+uint32_t nnik_isqrt32(uint32_t v)
+{
+    uint32_t r = 0, b = 1UL << 30;
+    while (b > v)
+        b >>= 2;
+    while (b) {
+        if (v >= r + b) {
+            v -= r + b;
+            r = (r >> 1) + b;
+        } else {
+            r >>= 1;
+        }
+        b >>= 2;
+    }
+    return r;
+}
+
+uint32_t nnik_isqrt64(uint64_t v)
+{
+    uint64_t r = 0, b = 1ULL << 62;
+    if (v < 0x100000000ULL)
+        return nnik_isqrt32((uint32_t)v);
+    while (b > v)
+        b >>= 2;
+    while (b) {
+        if (v >= r + b) {
+            v -= r + b;
+            r = (r >> 1) + b;
+        } else {
+            r >>= 1;
+        }
+        b >>= 2;
+    }
+    return (uint32_t)r;
+}
+
+void nnik_gc_init(nnik_gc_t *g, nnik_gc_emit_fn emit, nnik_gc_busy_fn busy)
+{
+    int32_t in[2];
+    in[0] = NNIK_GC_ORIGIN_X_UM;
+    in[1] = NNIK_GC_ORIGIN_Y_UM;
+    g->pos[0] = g->pos[1] = 0;
+    NNIK_GC_IK(in, g->steps);
+    g->feed = NNIK_GC_FEED_UM_MIN;
+    g->line_no = 0;
+    g->segments = 0;
+    g->clamped = 0;
+    g->motion = 0;
+    g->inch = 0;
+    g->relative = 0;
+    g->emit = emit;
+    g->busy = busy;
+    g->msg[0] = 0;
+}
+
+int8_t nnik_gc_too_long(nnik_gc_t *g)
+{
+    g->line_no++;
+    return fail(g, M_LONG, 0, 0);
+}
+
+/* ---------------------------------------------------------------- motion */
+static int32_t iabs32(int32_t v) { return v < 0 ? -v : v; }
+
+/* One segment from g->pos to (x, y): IK at the end, steps and ticks to emit(). */
+static void seg_to(nnik_gc_t *g, int32_t x, int32_t y, int32_t feed)
+{
+    int32_t in[2], out[2], d[2], dx, dy;
+    uint32_t len, ticks, a;
+    if (g->busy)
+        g->busy(1);
+    dx = x - g->pos[0];
+    dy = y - g->pos[1];
+    len = nnik_isqrt32((uint32_t)(dx * dx) + (uint32_t)(dy * dy));
+    in[0] = NNIK_GC_ORIGIN_X_UM + x;
+    in[1] = NNIK_GC_ORIGIN_Y_UM + y;
+    if (NNIK_GC_IK(in, out))
+        g->clamped++;
+    d[0] = out[0] - g->steps[0];
+    d[1] = out[1] - g->steps[1];
+    ticks = (len * TICKS_PER_UM_MIN + (uint32_t)feed - 1) / (uint32_t)feed;
+    a = (uint32_t)iabs32(d[0]);
+    if (ticks < a)
+        ticks = a;
+    a = (uint32_t)iabs32(d[1]);
+    if (ticks < a)
+        ticks = a;
+    if (ticks == 0)
+        ticks = 1;
+    g->pos[0] = x;
+    g->pos[1] = y;
+    g->steps[0] = out[0];
+    g->steps[1] = out[1];
+    g->segments++;
+    if (g->busy)
+        g->busy(0);
+    g->emit(g, d, ticks);
+}
+
+/* floor division and remainder (0 <= r < n), n > 0 */
+static int32_t floordiv(int32_t a, int32_t n, int32_t *r)
+{
+    int32_t q = a / n, m = a % n;
+    if (m < 0) {
+        q -= 1;
+        m += n;
+    }
+    *r = m;
+    return q;
+}
+
+static void line_to(nnik_gc_t *g, int32_t x, int32_t y, int32_t feed)
+{
+    int32_t x0 = g->pos[0], y0 = g->pos[1], dx = x - x0, dy = y - y0;
+    int32_t n, k, qx, qy, rx, ry, ax = 0, ay = 0, px = x0, py = y0;
+    uint32_t len;
+    if (dx == 0 && dy == 0)
+        return;
+    len = nnik_isqrt64((uint64_t)((int64_t)dx * dx) + (uint64_t)((int64_t)dy * dy));
+    n = (int32_t)((len + NNIK_GC_SEG_UM - 1) / NNIK_GC_SEG_UM);
+    if (n < 1)
+        n = 1;
+    qx = floordiv(dx, n, &rx);
+    qy = floordiv(dy, n, &ry);
+    for (k = 1; k <= n; k++) { /* p_k = p0 + floor(d * k / n) */
+        px += qx;
+        ax += rx;
+        if (ax >= n) {
+            ax -= n;
+            px += 1;
+        }
+        py += qy;
+        ay += ry;
+        if (ay >= n) {
+            ay -= n;
+            py += 1;
+        }
+        seg_to(g, px, py, feed);
+    }
+}
+
+/* round(a / b) half away from zero, b > 0 */
+static int32_t div_round(int64_t a, uint32_t b)
+{
+    uint64_t u = a < 0 ? (uint64_t)(-a) : (uint64_t)a;
+    int32_t q = (int32_t)((2 * u + b) / (2 * (uint64_t)b));
+    return a < 0 ? -q : q;
+}
+
+static int64_t chord2(const int32_t a[2], const int32_t b[2])
+{
+    int64_t dx = (int64_t)b[0] - a[0], dy = (int64_t)b[1] - a[1];
+    return dx * dx + dy * dy;
+}
+
+/* Bisect the arc cur -> end (vectors from the centre, at most a quarter turn) until every
+ * chord is <= SEG; midpoints are (a + b) scaled to radius r. */
+static void arc_piece(nnik_gc_t *g, const int32_t c[2], int32_t cur[2], const int32_t end[2], uint32_t r,
+                      int32_t feed)
+{
+    static int32_t stack[ARC_STACK][2];
+    uint8_t top = 0;
+    const int64_t seg2 = (int64_t)NNIK_GC_SEG_UM * NNIK_GC_SEG_UM;
+    stack[0][0] = end[0];
+    stack[0][1] = end[1];
+    top = 1;
+    while (top) {
+        int32_t *b = stack[top - 1];
+        if (chord2(cur, b) <= seg2 || top == ARC_STACK) {
+            cur[0] = b[0];
+            cur[1] = b[1];
+            top--;
+            seg_to(g, c[0] + cur[0], c[1] + cur[1], feed);
+        } else {
+            int32_t mx = cur[0] + b[0], my = cur[1] + b[1];
+            uint32_t m = nnik_isqrt64((uint64_t)((int64_t)mx * mx) + (uint64_t)((int64_t)my * my));
+            stack[top][0] = div_round((int64_t)mx * r, m);
+            stack[top][1] = div_round((int64_t)my * r, m);
+            top++;
+        }
+    }
+}
+
+static void arc_to(nnik_gc_t *g, const int32_t c[2], const int32_t end[2], uint32_t r, int8_t dir,
+                   int32_t feed)
+{
+    int32_t cur[2], e[2], nxt[2];
+    cur[0] = g->pos[0] - c[0];
+    cur[1] = g->pos[1] - c[1];
+    e[0] = end[0] - c[0];
+    e[1] = end[1] - c[1];
+    for (;;) {
+        int64_t cross = (int64_t)cur[0] * e[1] - (int64_t)cur[1] * e[0];
+        int64_t dot = (int64_t)cur[0] * e[0] + (int64_t)cur[1] * e[1];
+        if (dir < 0)
+            cross = -cross;
+        if (cross > 0 && dot >= 0) {
+            arc_piece(g, c, cur, e, r, feed);
+            return;
+        }
+        nxt[0] = dir > 0 ? -cur[1] : cur[1];
+        nxt[1] = dir > 0 ? cur[0] : -cur[0];
+        arc_piece(g, c, cur, nxt, r, feed);
+    }
+}
+
+/* ---------------------------------------------------------------- parsing */
+typedef struct {
+    uint8_t have, neg, dot, nd;
+    uint16_t ip;
+    uint32_t fr;
+} num_t;
+
+enum { W_X, W_Y, W_I, W_J, W_F, W_N };
+
+/* scan [+-]digits[.digits] at *ps; 0 or an error template */
+static const char *scan_num(const char **ps, num_t *n)
+{
+    const char *s = *ps;
+    uint8_t digits = 0;
+    n->neg = n->dot = n->nd = 0;
+    n->ip = 0;
+    n->fr = 0;
+    if (*s == '+' || *s == '-')
+        n->neg = (*s++ == '-');
+    while (*s >= '0' && *s <= '9') {
+        if (n->ip > 999) /* a fifth digit */
+            return M_BIG;
+        n->ip = (uint16_t)(n->ip * 10 + (*s++ - '0'));
+        digits++;
+    }
+    if (*s == '.') {
+        s++;
+        n->dot = 1;
+        while (*s >= '0' && *s <= '9') {
+            if (n->nd == 5)
+                return M_DEC;
+            n->fr = n->fr * 10 + (uint32_t)(*s++ - '0');
+            n->nd++;
+            digits++;
+        }
+    }
+    if (!digits)
+        return M_BADNUM;
+    *ps = s;
+    n->have = 1;
+    return 0;
+}
+
+/* the number in um (or um/min): int * scale + round_half_up(frac * scale / 10^nd), signed */
+static int32_t to_um(const num_t *n, uint8_t inch)
+{
+    uint32_t scale = inch ? 25400UL : 1000UL, p = 1, f;
+    uint8_t k;
+    int32_t v;
+    for (k = 0; k < n->nd; k++)
+        p *= 10;
+    f = (n->fr * scale + p / 2) / p;
+    v = (int32_t)((uint32_t)n->ip * scale + f);
+    return n->neg ? -v : v;
+}
+
+int8_t nnik_gc_line(nnik_gc_t *g, const char *line)
+{
+    char buf[NNIK_GC_LINE_MAX + 1];
+    const char *s;
+    const char *err;
+    uint8_t i = 0, in_comment = 0, wait = 0, motion = 0xff, inch = g->inch, rel = g->relative;
+    num_t w[6];
+    int32_t tgt[2], feed;
+    char c;
+
+    g->line_no++;
+    /* strip blanks and comments, upper-case */
+    for (s = line; (c = *s) != 0; s++) {
+        if (in_comment) {
+            if (c == ')')
+                in_comment = 0;
+            continue;
+        }
+        if (c == ';')
+            break;
+        if (c == '(') {
+            in_comment = 1;
+            continue;
+        }
+        if (c == ' ' || c == '\t' || c == '\r')
+            continue;
+        if (i == NNIK_GC_LINE_MAX)
+            return fail(g, M_LONG, 0, 0);
+        buf[i++] = (c >= 'a' && c <= 'z') ? (char)(c - 32) : c;
+    }
+    if (in_comment)
+        return fail(g, M_COMMENT, 0, 0);
+    buf[i] = 0;
+
+    for (i = 0; i < 6; i++)
+        w[i].have = 0;
+    for (s = buf; *s;) {
+        num_t n;
+        char letter = *s++;
+        int8_t idx = -1;
+        if (letter < 'A' || letter > 'Z')
+            return fail(g, M_CHAR, 0, 0);
+        switch (letter) {
+        case 'X': idx = W_X; break;
+        case 'Y': idx = W_Y; break;
+        case 'I': idx = W_I; break;
+        case 'J': idx = W_J; break;
+        case 'F': idx = W_F; break;
+        case 'N': idx = W_N; break;
+        case 'G': case 'M': break;
+        default: return fail(g, M_WORD, letter, 0);
+        }
+        err = scan_num(&s, &n);
+        if (err)
+            return fail(g, err, letter, 0);
+        if (idx >= 0) {
+            if (w[idx].have && idx != W_N)
+                return fail(g, M_REPEAT, letter, 0);
+            w[idx] = n;
+            continue;
+        }
+        if (n.neg || n.dot)
+            return fail(g, M_INT, letter, 0);
+        if (letter == 'G') {
+            if (n.ip <= 3) {
+                if (motion != 0xff)
+                    return fail(g, M_TWO, 0, 0);
+                motion = (uint8_t)n.ip;
+            } else if (n.ip == 20 || n.ip == 21) {
+                inch = n.ip == 20;
+            } else if (n.ip == 90 || n.ip == 91) {
+                rel = n.ip == 91;
+            } else {
+                return fail(g, M_CMD, letter, n.ip);
+            }
+        } else if (n.ip == 2 || n.ip == 30 || n.ip == 400) {
+            wait = 1;
+        } else {
+            return fail(g, M_CMD, letter, n.ip);
+        }
+    }
+
+    /* check everything before anything changes */
+    if (motion == 0xff)
+        motion = g->motion;
+    feed = g->feed;
+    if (w[W_F].have) {
+        feed = to_um(&w[W_F], inch);
+        if (feed < MIN_FEED)
+            return fail(g, M_FEED, 0, 0);
+    }
+    if ((w[W_I].have || w[W_J].have) && motion < 2)
+        return fail(g, M_IJ, 0, 0);
+    for (i = 0; i < 2; i++) {
+        tgt[i] = g->pos[i];
+        if (w[i].have) {
+            int32_t v = to_um(&w[i], inch);
+            tgt[i] = rel ? g->pos[i] + v : v;
+        }
+        if (tgt[i] > POS_LIMIT || tgt[i] < -POS_LIMIT)
+            return fail(g, M_RANGE, 0, 0);
+    }
+    {
+        uint8_t axes = w[W_X].have || w[W_Y].have || w[W_I].have || w[W_J].have;
+        int32_t c2[2];
+        uint32_t r = 0;
+        if (axes && motion >= 2) {
+            int32_t a0, a1, e0, e1;
+            uint32_t re, tol;
+            if (!w[W_I].have && !w[W_J].have)
+                return fail(g, M_ARCIJ, 0, 0);
+            c2[0] = g->pos[0] + (w[W_I].have ? to_um(&w[W_I], inch) : 0);
+            c2[1] = g->pos[1] + (w[W_J].have ? to_um(&w[W_J], inch) : 0);
+            if (c2[0] > POS_LIMIT || c2[0] < -POS_LIMIT || c2[1] > POS_LIMIT || c2[1] < -POS_LIMIT)
+                return fail(g, M_RANGE, 0, 0);
+            a0 = g->pos[0] - c2[0];
+            a1 = g->pos[1] - c2[1];
+            e0 = tgt[0] - c2[0];
+            e1 = tgt[1] - c2[1];
+            r = nnik_isqrt64((uint64_t)((int64_t)a0 * a0) + (uint64_t)((int64_t)a1 * a1));
+            if (r == 0)
+                return fail(g, M_R0, 0, 0);
+            re = nnik_isqrt64((uint64_t)((int64_t)e0 * e0) + (uint64_t)((int64_t)e1 * e1));
+            tol = 5 + r / 1000;
+            if (re == 0 || (re > r ? re - r : r - re) > tol)
+                return fail(g, M_OFF, 0, 0);
+        }
+        /* commit the modal state, then move */
+        g->inch = inch;
+        g->relative = rel;
+        g->motion = motion;
+        g->feed = feed;
+        if (axes) {
+            int32_t f = motion == 0 ? (int32_t)NNIK_GC_RAPID_UM_MIN : feed;
+            if (motion >= 2)
+                arc_to(g, c2, tgt, r, motion == 3 ? 1 : -1, f);
+            else
+                line_to(g, tgt[0], tgt[1], f);
+        }
+    }
+    return wait;
+}

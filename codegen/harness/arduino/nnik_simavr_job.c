@@ -1,0 +1,186 @@
+/*
+ * nnik_simavr_job - run a G-code sketch (examples/NAME_gcode) on a simulated ATmega328P
+ * (simavr, 16 MHz), send it a job over UART0 one line at a time (the next line only after
+ * the answer to the previous one, as a G-code sender does) and record, with cycle times:
+ *
+ *   R <cycle> <text>        a line the firmware printed (banner, "ok", "error: ...")
+ *   S <cycle> <motor> <dir> a rising edge on a STEP pin (motor 0: PD2, 1: PD3) and the DIR
+ *                           pin level then (PD5, PD6)
+ *   M <cycle>               the segment marker (PD4) changed: a segment started
+ *   B <cycle> <0|1>         the busy pin (PB0): a segment is being computed
+ *   E <cycle> <state> <replies>   the end (state: "done", "halted", "timeout", "crashed")
+ *
+ * usage: nnik_simavr_job FIRMWARE.elf JOB_LINES MAX_SECONDS
+ * JOB_LINES holds the lines to send, one per line.  The run ends after the answer to the last
+ * line (send M400 last to wait for the motion), after MAX_SECONDS of simulated time, or when
+ * the firmware crashes.
+ */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <simavr/sim_avr.h>
+#include <simavr/sim_elf.h>
+#include <simavr/sim_irq.h>
+#include <simavr/avr_ioport.h>
+#include <simavr/avr_uart.h>
+
+#define CLOCK_HZ 16000000UL
+
+static avr_t *avr;
+static avr_irq_t *uart_in;
+static char *job;             /* all lines, '\n'-terminated */
+static size_t job_len, job_pos, line_end;
+static int n_lines, n_replies, xoff;
+static int pin_state[2][8];   /* [port B, D][bit]: last level seen */
+static char out_line[256];
+static size_t out_len;
+
+static void pump(void)
+{
+    while (!xoff && job_pos < line_end)
+        avr_raise_irq(uart_in, (uint8_t)job[job_pos++]);
+}
+
+static void queue_next_line(void)
+{
+    size_t e = job_pos;
+    if (e >= job_len)
+        return;
+    while (e < job_len && job[e] != '\n')
+        e++;
+    line_end = e + 1;
+    pump();
+}
+
+static void on_xon(struct avr_irq_t *irq, uint32_t value, void *param)
+{
+    (void)irq; (void)value; (void)param;
+    xoff = 0;
+    pump();
+}
+
+static void on_xoff(struct avr_irq_t *irq, uint32_t value, void *param)
+{
+    (void)irq; (void)value; (void)param;
+    xoff = 1;
+}
+
+static void on_uart(struct avr_irq_t *irq, uint32_t value, void *param)
+{
+    (void)irq; (void)param;
+    if (value != '\n') {
+        if (out_len < sizeof out_line - 1)
+            out_line[out_len++] = (char)value;
+        return;
+    }
+    out_line[out_len] = 0;
+    printf("R %llu %s\n", (unsigned long long)avr->cycle, out_line);
+    out_len = 0;
+    if (strncmp(out_line, "nnik ", 5) == 0 || strcmp(out_line, "ok") == 0 || strncmp(out_line, "error:", 6) == 0) {
+        if (out_line[0] != 'n')
+            n_replies++;
+        queue_next_line();
+    }
+}
+
+static void on_pin(struct avr_irq_t *irq, uint32_t value, void *param)
+{
+    int code = (int)(intptr_t)param; /* port * 8 + bit */
+    int port = code / 8, bit = code % 8;
+    int old = pin_state[port][bit];
+    (void)irq;
+    value = value ? 1 : 0;
+    if ((int)value == old)
+        return;
+    pin_state[port][bit] = (int)value;
+    if (port == 1 && (bit == 2 || bit == 3) && value)
+        printf("S %llu %d %d\n", (unsigned long long)avr->cycle, bit - 2, pin_state[1][bit + 3]);
+    else if (port == 1 && bit == 4)
+        printf("M %llu\n", (unsigned long long)avr->cycle);
+    else if (port == 0 && bit == 0)
+        printf("B %llu %u\n", (unsigned long long)avr->cycle, value);
+}
+
+static void watch(char port, int bit, int code)
+{
+    avr_irq_t *irq = avr_io_getirq(avr, AVR_IOCTL_IOPORT_GETIRQ(port), bit);
+    avr_irq_register_notify(irq, on_pin, (void *)(intptr_t)code);
+}
+
+int main(int argc, char **argv)
+{
+    elf_firmware_t fw;
+    FILE *f;
+    uint32_t flags = 0;
+    unsigned long long limit;
+    const char *state = "done";
+    int i, rc;
+
+    if (argc != 4) {
+        fprintf(stderr, "usage: %s FIRMWARE.elf JOB_LINES MAX_SECONDS\n", argv[0]);
+        return 2;
+    }
+    memset(&fw, 0, sizeof fw);
+    if (elf_read_firmware(argv[1], &fw) != 0) {
+        fprintf(stderr, "cannot read %s\n", argv[1]);
+        return 2;
+    }
+    f = fopen(argv[2], "rb");
+    if (!f) {
+        fprintf(stderr, "cannot read %s\n", argv[2]);
+        return 2;
+    }
+    fseek(f, 0, SEEK_END);
+    job_len = (size_t)ftell(f);
+    fseek(f, 0, SEEK_SET);
+    job = malloc(job_len + 1);
+    if (!job || fread(job, 1, job_len, f) != job_len) {
+        fprintf(stderr, "cannot read %s\n", argv[2]);
+        return 2;
+    }
+    fclose(f);
+    for (i = 0; i < (int)job_len; i++)
+        n_lines += job[i] == '\n';
+    limit = (unsigned long long)(atof(argv[3]) * CLOCK_HZ);
+
+    avr = avr_make_mcu_by_name("atmega328p");
+    if (!avr) {
+        fprintf(stderr, "simavr has no atmega328p\n");
+        return 2;
+    }
+    avr_init(avr);
+    avr->frequency = CLOCK_HZ;
+    avr_load_firmware(avr, &fw);
+    avr->frequency = CLOCK_HZ;
+
+    /* no console echo of the UART, no host sleeps while the firmware polls it */
+    avr_ioctl(avr, AVR_IOCTL_UART_GET_FLAGS('0'), &flags);
+    flags &= ~(uint32_t)(AVR_UART_FLAG_STDIO | AVR_UART_FLAG_POLL_SLEEP);
+    avr_ioctl(avr, AVR_IOCTL_UART_SET_FLAGS('0'), &flags);
+    uart_in = avr_io_getirq(avr, AVR_IOCTL_UART_GETIRQ('0'), UART_IRQ_INPUT);
+    avr_irq_register_notify(avr_io_getirq(avr, AVR_IOCTL_UART_GETIRQ('0'), UART_IRQ_OUTPUT), on_uart, NULL);
+    avr_irq_register_notify(avr_io_getirq(avr, AVR_IOCTL_UART_GETIRQ('0'), UART_IRQ_OUT_XON), on_xon, NULL);
+    avr_irq_register_notify(avr_io_getirq(avr, AVR_IOCTL_UART_GETIRQ('0'), UART_IRQ_OUT_XOFF), on_xoff, NULL);
+    for (i = 2; i <= 6; i++)
+        watch('D', i, 8 + i);
+    watch('B', 0, 0);
+
+    for (;;) {
+        rc = avr_run(avr);
+        if (rc == cpu_Done || rc == cpu_Crashed) {
+            state = rc == cpu_Done ? "halted" : "crashed";
+            break;
+        }
+        if (n_lines > 0 && n_replies >= n_lines) {
+            state = "done";
+            break;
+        }
+        if (avr->cycle > limit) {
+            state = "timeout";
+            break;
+        }
+    }
+    printf("E %llu %s %d\n", (unsigned long long)avr->cycle, state, n_replies);
+    return 0;
+}

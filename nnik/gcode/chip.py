@@ -1,0 +1,188 @@
+"""Build the library's sketches with Debian's Arduino AVR core and run them on simavr.
+
+Build: avr-gcc/avr-g++ straight over the core's sources (arduino-core-avr, the Uno's
+ATmega328P at 16 MHz, the IDE's flags), the sketch and the library's src/. Run: the harness
+codegen/harness/arduino/nnik_simavr_job.c (linked against libsimavr) sends a job over UART0
+and records every STEP/DIR edge, the segment marker and the busy pin with cycle times.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import shutil
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from nnik.targets.toolchain import HARNESS_DIR, TargetError, find_tool, run
+
+CORE_ROOT = Path(os.environ.get("NNIK_ARDUINO_AVR", "/usr/share/arduino/hardware/arduino/avr"))
+SIMAVR_HEADER = Path("/usr/include/simavr/sim_avr.h")
+HARNESS_SRC = HARNESS_DIR / "arduino" / "nnik_simavr_job.c"
+MCU = "atmega328p"
+CLOCK_HZ = 16_000_000
+FLASH_BYTES = 32 * 1024 - 512  # the Uno's optiboot takes 512 B
+RAM_BYTES = 2048
+COMMON = [f"-mmcu={MCU}", f"-DF_CPU={CLOCK_HZ}L", "-DARDUINO=10807", "-DARDUINO_AVR_UNO", "-DARDUINO_ARCH_AVR",
+          "-Os", "-g0", "-ffunction-sections", "-fdata-sections", "-Wall"]
+C_FLAGS = ["-std=gnu11"]
+# Debian's avr-gcc 5.4 <float.h> defines DECIMAL_DIG for C only; WString.cpp needs it in C++
+CXX_FLAGS = ["-std=gnu++11", "-fpermissive", "-fno-exceptions", "-fno-threadsafe-statics",
+             "-DDECIMAL_DIG=__DECIMAL_DIG__"]
+
+
+def available() -> tuple[bool, str]:
+    """(True, "") if avr-gcc, avr-g++, simavr, the Arduino core and libsimavr's headers are there."""
+    missing = [t for t in ("avr-gcc", "avr-g++", "avr-size", "simavr", "gcc") if find_tool(t) is None]
+    if not (CORE_ROOT / "cores" / "arduino" / "Arduino.h").is_file():
+        missing.append(f"Arduino AVR core ({CORE_ROOT}, Debian package arduino-core-avr)")
+    if not SIMAVR_HEADER.is_file():
+        missing.append("libsimavr headers (Debian package libsimavr-dev)")
+    if missing:
+        return False, f"missing {', '.join(missing)}; run scripts/install_toolchains.sh"
+    return True, ""
+
+
+def _require() -> None:
+    ok, why = available()
+    if not ok:
+        raise TargetError(why)
+
+
+def _includes() -> list[str]:
+    return [f"-I{CORE_ROOT / 'cores' / 'arduino'}", f"-I{CORE_ROOT / 'variants' / 'standard'}"]
+
+
+def _compile(src: Path, obj: Path, extra: list[str], cwd: Path) -> Path:
+    if src.suffix in (".cpp", ".ino"):
+        cmd = [find_tool("avr-g++"), *COMMON, *CXX_FLAGS, "-x", "c++"]
+    elif src.suffix == ".S":
+        cmd = [find_tool("avr-gcc"), *COMMON, "-x", "assembler-with-cpp"]
+    else:
+        cmd = [find_tool("avr-gcc"), *COMMON, *C_FLAGS]
+    run([*cmd, *_includes(), *extra, "-c", src, "-o", obj], f"compile {src.name}", cwd=cwd, log=obj.with_suffix(".log"))
+    return obj
+
+
+def build_core(workdir: Path) -> Path:
+    """core.a of the Arduino AVR core for the Uno (cached in workdir)."""
+    _require()
+    core = CORE_ROOT / "cores" / "arduino"
+    out = Path(workdir) / "core"
+    lib = out / "core.a"
+    if lib.is_file():
+        return lib
+    out.mkdir(parents=True, exist_ok=True)
+    srcs = sorted(p for p in core.iterdir() if p.suffix in (".c", ".cpp", ".S"))
+    objs = [_compile(s, out / f"{s.name}.o", [], out) for s in srcs]
+    tmp = out / "core.a.tmp"
+    run([find_tool("avr-ar") or "avr-ar", "rcs", tmp, *objs], "avr-ar core", cwd=out)
+    tmp.rename(lib)
+    return lib
+
+
+@dataclass
+class Firmware:
+    elf: Path
+    flash_bytes: int
+    ram_bytes: int
+
+
+def build_sketch(libdir: Path, example: str, workdir: Path) -> Firmware:
+    """Compile examples/EXAMPLE/EXAMPLE.ino with the library's src/ and the core; link; size."""
+    libdir, workdir = Path(libdir), Path(workdir)
+    core = build_core(workdir)
+    sketch = libdir / "examples" / example / f"{example}.ino"
+    bdir = workdir / example
+    bdir.mkdir(parents=True, exist_ok=True)
+    inc = [f"-I{libdir / 'src'}"]
+    objs = [_compile(sketch, bdir / f"{example}.ino.o", inc, bdir)]
+    for src in sorted((libdir / "src").glob("*.c")):
+        objs.append(_compile(src, bdir / f"{src.name}.o", inc, bdir))
+    elf = bdir / f"{example}.elf"
+    run([find_tool("avr-gcc"), f"-mmcu={MCU}", "-Os", "-Wl,--gc-sections", "-o", elf, *objs, core, "-lm"],
+        f"link {example}", cwd=bdir, log=bdir / "link.log")
+    res = run([find_tool("avr-size"), "-A", elf], "avr-size", cwd=bdir)
+    sec = {}
+    for line in res.stdout.splitlines():
+        parts = line.split()
+        if len(parts) >= 2 and parts[0].startswith(".") and parts[1].isdigit():
+            sec[parts[0]] = int(parts[1])
+    return Firmware(elf, sec.get(".text", 0) + sec.get(".data", 0), sec.get(".data", 0) + sec.get(".bss", 0))
+
+
+def build_harness(workdir: Path) -> Path:
+    """The simavr job runner, compiled for the host against libsimavr (cached by source hash)."""
+    _require()
+    digest = hashlib.sha256(HARNESS_SRC.read_bytes()).hexdigest()[:12]
+    exe = Path(workdir) / f"nnik_simavr_job-{digest}"
+    if not exe.is_file():
+        Path(workdir).mkdir(parents=True, exist_ok=True)
+        tmp = exe.with_suffix(".tmp")
+        run([find_tool("gcc"), "-O2", "-Wall", "-Wextra", "-Werror", HARNESS_SRC, "-o", tmp, "-lsimavr"],
+            "build the simavr harness", cwd=workdir)
+        tmp.rename(exe)
+    return exe
+
+
+@dataclass
+class ChipRun:
+    """What the simulated chip did: replies, step events, segment starts, busy windows."""
+
+    replies: list[tuple[int, str]]  # (cycle, text), the banner included
+    steps: np.ndarray  # (K, 3) int64: cycle, motor, dir (1: positive)
+    marks: np.ndarray  # (S,) cycles at which segments started
+    busy: np.ndarray  # (B, 2) cycles: rise, fall of the busy pin
+    end_cycle: int
+    state: str
+
+
+def parse_events(text: str) -> ChipRun:
+    replies, steps, marks, busy_edges = [], [], [], []
+    end_cycle, state = 0, "missing"
+    for line in text.splitlines():
+        tag, _, rest = line.partition(" ")
+        if tag == "R":
+            cyc, _, msg = rest.partition(" ")
+            replies.append((int(cyc), msg))
+        elif tag == "S":
+            c, m, d = rest.split()
+            steps.append((int(c), int(m), int(d)))
+        elif tag == "M":
+            marks.append(int(rest))
+        elif tag == "B":
+            c, v = rest.split()
+            busy_edges.append((int(c), int(v)))
+        elif tag == "E":
+            parts = rest.split()
+            end_cycle, state = int(parts[0]), parts[1]
+    rises = [c for c, v in busy_edges if v == 1]
+    falls = [c for c, v in busy_edges if v == 0]
+    n = min(len(rises), len(falls))
+    return ChipRun(replies, np.asarray(steps, dtype=np.int64).reshape(-1, 3), np.asarray(marks, dtype=np.int64),
+                   np.stack([rises[:n], falls[:n]], 1).astype(np.int64) if n else np.zeros((0, 2), np.int64),
+                   end_cycle, state)
+
+
+def run_firmware(fw: Firmware, lines: list[str], workdir: Path, max_seconds: float) -> ChipRun:
+    """Send lines (then nothing) to the firmware on simavr; the run ends after the last answer."""
+    exe = build_harness(workdir)
+    job = Path(workdir) / "job_lines.txt"
+    job.write_bytes("".join(f"{ln}\n" for ln in lines).encode("latin-1"))
+    res = run([exe, fw.elf, job, f"{max_seconds:g}"], "simavr job", cwd=workdir,
+              timeout=120 + 60 * max_seconds, log=None)
+    chip = parse_events(res.stdout)
+    if chip.state == "missing":
+        raise TargetError("simavr job: the harness reported no end")
+    return chip
+
+
+def tool_missing_reason() -> str | None:
+    ok, why = available()
+    return None if ok else why
+
+
+def clean(workdir: Path) -> None:
+    shutil.rmtree(workdir, ignore_errors=True)
