@@ -9,12 +9,13 @@ from __future__ import annotations
 
 import re
 
-# The longest scenario name whose generated C still builds on every toolchain. SDCC pic16
-# emits sections named after the longest symbols (`<name>_lut_tab`, `<name>_float_round`, ...);
-# gputils stores section names in 8 + ... bytes of COFF and a longer name makes gplink fail
-# with "section must be contiguous". Found by building names of growing length (see
-# tests/test_c_text.py).
-MAX_NAME_LEN = 32
+# The longest scenario name whose generated C still builds on every toolchain. SDCC pic16 names
+# a function's code section "S_<file stem>__<function>" and gputils cuts section names at 78
+# characters; two functions whose names then coincide fail in gpasm with "Each object file
+# section must be contiguous". The tightest pair is NAME_float.c's NAME_float_round and
+# NAME_float_ik: 2 + (n + 6) + 2 + (n + 7) + 1 <= 78, so n <= 30. Measured: 30 builds, 31 and
+# 41 fail (tests/test_c_text.py builds every generated file of a 30-character name on gpsim).
+MAX_NAME_LEN = 30
 
 C_KEYWORDS = frozenset("""
 auto break case char const continue default do double else enum extern float for goto if inline

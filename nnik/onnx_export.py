@@ -11,6 +11,7 @@ import onnx
 import onnxruntime as ort
 import torch
 
+from nnik.errors import NnikError
 from nnik.train import TrainedModel
 
 ONNX_TOLERANCE = 1e-6  # normalised output units
@@ -37,8 +38,17 @@ def export_onnx(model: TrainedModel, path: Path) -> None:
 def check_onnx(model: TrainedModel, path: Path, p_mm: np.ndarray) -> float:
     """Max |onnxruntime - torch| over the points, in standardised output units."""
     xn = model.scaling.normalize(p_mm)
-    sess = ort.InferenceSession(str(path), providers=["CPUExecutionProvider"])
-    y_ort = sess.run(None, {"x_normalized": xn})[0]
+    if not Path(path).is_file():
+        raise NnikError("ONNX model not found (run `nnik train` again)", str(path))
+    try:
+        sess = ort.InferenceSession(str(path), providers=["CPUExecutionProvider"])
+        y_ort = sess.run(None, {"x_normalized": xn})[0]
+    except Exception as exc:  # onnxruntime raises its own types for corrupt or foreign models
+        reason = str(exc).splitlines()[0][:120] if str(exc) else ""
+        raise NnikError(f"corrupt or foreign ONNX model ({type(exc).__name__}: {reason}); run `nnik train` again",
+                        str(path)) from None
+    if y_ort.shape != (len(xn), model.net.shape[-1]):
+        raise NnikError(f"ONNX model gives outputs of shape {y_ort.shape}, not the trained network's", str(path))
     with torch.no_grad():
         y_torch = model.net(torch.from_numpy(xn)).numpy()
     return float(np.abs(y_ort - y_torch).max())

@@ -1,7 +1,10 @@
 """Training: a small float64 tanh MLP, full or as a residual over an exact affine base.
 
 Adam warm-up, then L-BFGS (strong Wolfe) refinement with early stopping on the validation set,
-inside a wall-clock budget, with a few deterministic restarts; the best validation state wins.
+with a few deterministic restarts; the best validation state wins. The budget is counted in
+iterations (adam_steps, lbfgs_rounds, patience, restarts), so the same scenario and seed give the
+same model on any machine. [training] max_seconds is only a safety net: when it cuts training
+short, `stopped_by` says "wall_clock" (metrics.json records it, the CLI warns).
 """
 
 from __future__ import annotations
@@ -58,6 +61,7 @@ class TrainedModel:
     history: list[dict] = field(default_factory=list)
     train_seconds: float = 0.0
     normalize: bool = True
+    stopped_by: str = "budget"  # "budget" (iterations, patience) or "wall_clock" (the safety net fired)
 
     def predict(self, p_mm: np.ndarray) -> np.ndarray:
         """Positions (mm) -> actuator units, float64."""
@@ -80,6 +84,7 @@ class TrainedModel:
                 "history": self.history,
                 "train_seconds": self.train_seconds,
                 "normalize": self.normalize,
+                "stopped_by": self.stopped_by,
             },
             path,
         )
@@ -97,11 +102,22 @@ class TrainedModel:
             raise NnikError(f"not an nnik model file ({type(exc).__name__})", str(path)) from None
         if not isinstance(blob, dict) or blob.get("format") != MODEL_FORMAT:
             raise NnikError("not an nnik model file (unknown format)", str(path))
-        shape = blob["shape"]
-        net = MLP(shape[0], tuple(shape[1:-1]), shape[-1])
-        net.load_state_dict(blob["state_dict"])
-        scn = Scenario.from_dict(blob["scenario_raw"], blob["scenario_source"], Path(blob["scenario_base_dir"]))
-        return cls(net, Scaling.from_dict(blob["scaling"]), scn, blob["history"], blob["train_seconds"], blob["normalize"])
+        try:
+            shape = [int(v) for v in blob["shape"]]
+            if len(shape) < 3 or min(shape) < 1 or max(shape) > 4096:
+                raise ValueError(f"shape {shape}")
+            net = MLP(shape[0], tuple(shape[1:-1]), shape[-1])
+            net.load_state_dict(blob["state_dict"])
+            scaling = Scaling.from_dict(blob["scaling"])
+            raw, source, base = blob["scenario_raw"], str(blob["scenario_source"]), Path(blob["scenario_base_dir"])
+            history, seconds, normalize = list(blob["history"]), float(blob["train_seconds"]), bool(blob["normalize"])
+            stopped_by = str(blob.get("stopped_by", "budget"))
+        except (KeyError, TypeError, ValueError, RuntimeError, AttributeError) as exc:
+            reason = str(exc).splitlines()[0][:120] if str(exc) else ""
+            raise NnikError(f"corrupt nnik model file ({type(exc).__name__}: {reason}); run `nnik train` again",
+                            str(path)) from None
+        scn = Scenario.from_dict(raw, source, base)
+        return cls(net, scaling, scn, history, seconds, normalize, stopped_by)
 
 
 def make_scaling(scn: Scenario, ds: Dataset, normalize: bool) -> Scaling:
@@ -133,29 +149,33 @@ def train_model(scn: Scenario, ds: Dataset, normalize: bool | None = None, progr
     xt, yt = _tensors(scaling, ds.p["train"], ds.q["train"])
     xv, yv = _tensors(scaling, ds.p["val"], ds.q["val"])
     torch.set_num_threads(2)
-    budget = cfg["max_seconds"] / cfg["restarts"]
     t_start = time.perf_counter()
+    deadline = t_start + cfg["max_seconds"]  # the safety net, not the budget
     best: tuple[float, dict, int] | None = None
     history: list[dict] = []
+    stopped_by = "budget"
     bar = tqdm(total=cfg["restarts"], desc=f"train {scn.name}", unit="restart", disable=not progress, leave=False, mininterval=1.0)
     for restart in range(cfg["restarts"]):
         torch.manual_seed(1000 * scn.dataset["seed"] + restart)
         net = MLP(2, scn.network["hidden"], yt.shape[1])
-        val, state = _fit_one(net, xt, yt, xv, yv, cfg, budget, restart, history, t_start, bar)
+        val, state, cut = _fit_one(net, xt, yt, xv, yv, cfg, deadline, restart, history, t_start, bar)
         if best is None or val < best[0]:
             best = (val, state, restart)
         bar.update(1)
+        if cut:
+            stopped_by = "wall_clock"
+            break
     bar.close()
     net = MLP(2, scn.network["hidden"], yt.shape[1])
     net.load_state_dict(best[1])
     for h in history:
         h["best"] = h["restart"] == best[2]
-    return TrainedModel(net, scaling, scn, history, time.perf_counter() - t_start, normalize)
+    return TrainedModel(net, scaling, scn, history, time.perf_counter() - t_start, normalize, stopped_by)
 
 
-def _fit_one(net, xt, yt, xv, yv, cfg, budget, restart, history, t_start, bar):
+def _fit_one(net, xt, yt, xv, yv, cfg, deadline, restart, history, t_start, bar):
+    """One initialisation: Adam then L-BFGS. Returns (best val loss, its state, cut by the deadline)."""
     mse = nn.MSELoss()
-    t0 = time.perf_counter()
 
     def val_loss():
         with torch.no_grad():
@@ -175,8 +195,8 @@ def _fit_one(net, xt, yt, xv, yv, cfg, budget, restart, history, t_start, bar):
         sched.step()
         if step % 100 == 0:
             log("adam", loss.item())
-        if time.perf_counter() - t0 > 0.3 * budget:
-            break
+        if time.perf_counter() > deadline:
+            return val_loss(), copy.deepcopy(net.state_dict()), True
 
     lbfgs = torch.optim.LBFGS(net.parameters(), lr=1.0, max_iter=25, history_size=50,
                               line_search_fn="strong_wolfe", tolerance_grad=1e-14, tolerance_change=1e-16)
@@ -198,6 +218,8 @@ def _fit_one(net, xt, yt, xv, yv, cfg, budget, restart, history, t_start, bar):
         if v < best_val:
             best_val, best_state = v, copy.deepcopy(net.state_dict())
         bar.set_postfix(restart=restart, val=f"{best_val:.3e}")
-        if stale >= cfg["patience"] or time.perf_counter() - t0 > budget:
+        if stale >= cfg["patience"]:
             break
-    return best_val, best_state
+        if time.perf_counter() > deadline:
+            return best_val, best_state, True
+    return best_val, best_state, False

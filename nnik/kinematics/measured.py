@@ -39,15 +39,17 @@ def read_measurements(path: Path) -> tuple[np.ndarray, np.ndarray]:
         raise NnikError("file not found", src)
     reader = csv.reader(io.StringIO(_read_text(path), newline=""))
     rows = []
+    start = 1  # the line the row being read starts on (a quoted field may span lines)
     try:
         for row in reader:
             if row and not (len(row) == 1 and not row[0].strip()):
                 if any(len(v) > MAX_FIELD for v in row):
                     raise NnikError(f"a field of {max(map(len, row))} characters (a number needs at most {MAX_FIELD})",
-                                    src, f"line {reader.line_num}")
-                rows.append((reader.line_num, row))
+                                    src, f"line {start}")
+                rows.append((start, row))
+            start = reader.line_num + 1
     except csv.Error as exc:
-        raise NnikError(f"malformed CSV ({exc})", src, f"line {reader.line_num}") from None
+        raise NnikError(f"malformed CSV ({exc})", src, f"line {start}") from None
     if not rows:
         raise NnikError("empty CSV (expected a header x_um,y_um,q1,q2 and data rows)", src)
     header = tuple(c.strip() for c in rows[0][1])

@@ -1,0 +1,89 @@
+"""Scenario values that used to crash or fail late (issue 11, section 3-4): each is one line and
+exit 2 from `nnik generate`, before any file is written."""
+
+from __future__ import annotations
+
+import pytest
+
+from tests.bad_input import COREXY, GALVO, fails
+from tests.conftest import write_toml
+
+
+def _generate_fails(tmp_path, capsys, text, *needles):
+    toml = write_toml(tmp_path, text)
+    out = tmp_path / "out"
+    fails(capsys, ["generate", toml, "-o", out], str(toml), *needles, watch=out)
+    assert not out.exists()
+
+
+@pytest.mark.parametrize("kind", ['["galvo_gimbal"]', '{ a = 1 }'])
+def test_mechanism_kind_not_a_string(tmp_path, capsys, kind):
+    _generate_fails(tmp_path, capsys, GALVO.replace('kind = "galvo_gimbal"', f"kind = {kind}"),
+                    "[mechanism] kind", "must be one of")
+
+
+def test_actuator_kind_not_a_string(tmp_path, capsys):
+    _generate_fails(tmp_path, capsys, GALVO.replace('kind = "stepper"', 'kind = ["stepper"]'),
+                    "[actuator] kind", "must be one of")
+
+
+@pytest.mark.parametrize("key", ["n_train", "n_test"])
+def test_point_counts_are_bounded(tmp_path, capsys, key):
+    _generate_fails(tmp_path, capsys, GALVO.replace(f"{key} = ", f"{key} = 1000000000000 #"),
+                    f"[dataset] {key}", "must be in [10, 2000000]")
+
+
+def test_n_val_is_bounded(tmp_path, capsys):
+    _generate_fails(tmp_path, capsys, GALVO.replace("seed = 0", "seed = 0\nn_val = 1000000000000"),
+                    "[dataset] n_val", "2000000")
+
+
+def test_seed_is_bounded(tmp_path, capsys):
+    _generate_fails(tmp_path, capsys, GALVO.replace("seed = 0", f"seed = {2**62}"), "[dataset] seed", "4294967295")
+
+
+def test_tiny_mm_per_rev(tmp_path, capsys):
+    _generate_fails(tmp_path, capsys, COREXY.replace("mm_per_rev = 40.0", "mm_per_rev = 1e-9"),
+                    "[workspace]", "int32 range", "mm_per_rev")
+
+
+@pytest.mark.parametrize("hidden,needle", [("[100000]", "at most 256"), ("[6, 6, 6, 6, 6]", "at most 4 hidden layers")])
+def test_network_size_is_bounded(tmp_path, capsys, hidden, needle):
+    _generate_fails(tmp_path, capsys, GALVO.replace("hidden = [6]", f"hidden = {hidden}"), "[network] hidden", needle)
+
+
+def test_training_memory_is_estimated_before_allocating(tmp_path, capsys):
+    text = GALVO.replace("hidden = [6]", "hidden = [256, 256, 256, 256]").replace("n_train = 1000", "n_train = 2000000")
+    _generate_fails(tmp_path, capsys, text, "[network] hidden", "GiB")
+
+
+@pytest.mark.parametrize("name", ["NULL", "nnik_kernel", "NNIK_FLASH", "nnik", "int8_t", "main", "while", "_x", "sqrt"])
+def test_names_that_collide_with_c(tmp_path, capsys, name):
+    _generate_fails(tmp_path, capsys, GALVO.replace('name = "galvo_cba2012"', f'name = "{name}"'), "name", repr(name))
+
+
+def test_name_too_long_for_sdcc(tmp_path, capsys):
+    from nnik.c_text import MAX_NAME_LEN
+
+    name = "g" * (MAX_NAME_LEN + 1)
+    _generate_fails(tmp_path, capsys, GALVO.replace('name = "galvo_cba2012"', f'name = "{name}"'),
+                    "name", f"at most {MAX_NAME_LEN}")
+
+
+def test_axes_near_parallel_rejected_before_training(tmp_path, capsys):
+    """B_deg = 90 with A_deg = 90.25: the axes 0.25 deg apart used to fail only after training."""
+    _generate_fails(tmp_path, capsys, COREXY.replace("B_deg = 0.15", "B_deg = 90.0"),
+                    "[mechanism.distortion]", "near-singular", "within 45 deg of perpendicular")
+
+
+@pytest.mark.parametrize("z", ["1.0", "1e-9"])
+def test_gimbal_near_singularity(tmp_path, capsys, z):
+    """z tiny: the beam grazes the plane. One line: no numpy divide-by-zero warning before it."""
+    _generate_fails(tmp_path, capsys, GALVO.replace("z_mm = 300.0", f"z_mm = {z}"), "[mechanism] z_mm", "near-singular")
+
+
+def test_galvo_dual_near_singularity(tmp_path, capsys):
+    from tests.conftest import DATASETS
+
+    text = (DATASETS / "galvo_dual_xy2.toml").read_text().replace("d_mm = 200.0", "d_mm = 0.5")
+    _generate_fails(tmp_path, capsys, text, "[mechanism] d_mm", "near-singular")
