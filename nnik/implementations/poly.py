@@ -1,0 +1,183 @@
+"""The ``poly`` family: one polynomial per output in the normalised inputs, evaluated by Horner's
+scheme in int16 values with int32 products.
+
+* Normalisation and symmetry: :mod:`nnik.implementations.poly_fit` (the symmetry is detected
+  from the problem's own truth and drops monomials; measured data get none).
+* Fit: minimax (``scipy.optimize.linprog``, L-inf on the fit samples) or least squares.
+* Integer program, exponents by range analysis, interval proof, numpy model:
+  :mod:`nnik.implementations.poly_int`; its C: :mod:`nnik.implementations.poly_c` and
+  ``codegen/templates/poly_ik.c.j2``.
+
+Knobs: ``degree`` (total), optional ``degree_x``/``degree_y`` (per axis), ``fit``
+(minimax | lsq), ``coef_bits`` (16: int16 coefficients added after each shift; 32: int32
+coefficients added to the product before it, one rounding per step), ``split`` (the last
+factor of an odd output is a constant plus a finer residual: one more product, more bits),
+``guard`` (extra headroom bits; when given, the range analysis must prove it as is).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from nnik.errors import NnikError
+from nnik.implementations.base import Implementation, IntRun
+from nnik.implementations.problem import Problem
+from nnik.implementations import poly_fit, poly_int
+
+DEFAULTS = {"degree": 5, "fit": "minimax", "coef_bits": 16, "split": False}
+KNOBS = set(DEFAULTS) | {"degree_x", "degree_y", "guard"}
+MAX_LOWER = 12  # rounds of "lower the failing value's exponent" before giving up
+RANGE_GRID = 257
+
+
+def _symmetry(p: Problem) -> list:
+    if "poly_symmetry" not in p.cache:
+        p.cache["poly_symmetry"] = poly_fit.detect_symmetry(p)
+    return p.cache["poly_symmetry"]
+
+
+class PolyImpl(Implementation):
+    family = "poly"
+    doc = "bivariate polynomial per output, symmetric terms only, Horner in int16 on the hardware multiplier"
+
+    @classmethod
+    def ladder(cls, problem: Problem) -> list[dict]:
+        out = []
+        for d in range(2, 8):
+            out.append({"degree": d, "fit": "minimax", "coef_bits": 16, "split": False})
+            out.append({"degree": d, "fit": "minimax", "coef_bits": 32, "split": True})
+        return out
+
+    @classmethod
+    def fit(cls, problem: Problem, config: dict) -> "PolyImpl":
+        unknown = set(config) - KNOBS
+        if unknown:
+            raise NnikError(f"poly: unknown knob(s) {', '.join(sorted(unknown))}")
+        cfg = {**DEFAULTS, **config}
+        deg = cfg["degree"]
+        if not isinstance(deg, int) or not 1 <= deg <= 9:
+            raise NnikError(f"poly: degree must be an integer in 1..9, got {deg!r}")
+        if cfg["coef_bits"] not in (16, 32):
+            raise NnikError(f"poly: coef_bits must be 16 or 32, got {cfg['coef_bits']!r}")
+        self = cls(problem, cfg)
+        self.maps = poly_fit.axis_maps(problem)
+        self.sym = _symmetry(problem)
+        t, q = poly_fit.fit_data(problem)
+        self.coefs = []
+        for o in range(2):
+            terms = poly_fit.monomials(self.sym[o], deg, cfg.get("degree_x"), cfg.get("degree_y"))
+            c = poly_fit.fit_poly(t, q[:, o], terms, cfg["fit"])
+            self.coefs.append((float(c[0]), {ij: float(v) for ij, v in zip(terms, c[1:]) if v != 0.0}))
+        self._build()
+        return self
+
+    # ---- integer program ---------------------------------------------------------------------------
+    def _urange(self) -> list[tuple[int, int]]:
+        p = self.problem
+        return [(int(self.maps[a].u(np.array([p.lo[a]]))[0]), int(self.maps[a].u(np.array([p.hi[a]]))[0]))
+                for a in range(2)]
+
+    def _build(self) -> None:
+        ur = self._urange()
+        gx = np.unique(np.rint(np.linspace(*ur[0], RANGE_GRID)))
+        gy = np.unique(np.rint(np.linspace(*ur[1], RANGE_GRID)))
+        tx, ty = (g.ravel() / 32768.0 for g in np.meshgrid(gx, gy, indexing="xy"))
+        env = {"u": tx, "v": ty}
+        poly_int.Node._n = 0  # deterministic names, hence a deterministic C text
+        u, v = poly_int.Node("in", name="u"), poly_int.Node("in", name="v")
+        shared = {"u": u, "v": v, "u2": poly_int.Node("mac", u, u, name="u2"),
+                  "v2": poly_int.Node("mac", v, v, name="v2"), "uv": poly_int.Node("mac", u, v, name="uv")}
+        self.plans = [poly_int.plan_output(coefs, c00, shared, self.config["split"], env)
+                      for c00, coefs in self.coefs]
+        guard = self.config.get("guard")
+        lower: dict = {}
+        for _ in range(MAX_LOWER + 1):
+            prog = poly_int.build_program(self.plans, env, self.config["coef_bits"], guard or 0, ur, lower)
+            bad = poly_int.prove(prog, ur)
+            if bad is None:
+                self.prog = prog
+                return
+            if guard is not None or bad.startswith("out"):
+                break
+            lower[bad] = lower.get(bad, 0) + 1
+        raise NnikError(f"poly: range analysis cannot prove {bad} within int16/int32 "
+                        f"({self.describe()})")
+
+    def run(self, in_units: np.ndarray) -> IntRun:
+        p = self.problem
+        c, flags = p.clamp(in_units)
+        num = poly_int.evaluate(self.prog, self.maps[0].u(c[:, 0]), self.maps[1].u(c[:, 1]))
+        pre = np.empty(num.shape, dtype=np.float64)
+        out = np.empty(num.shape, dtype=np.int64)
+        for k, o in enumerate(self.prog.outs):
+            pre[:, k] = num[:, k] / 2.0**o.s + o.offset
+            out[:, k] = p.finish(num[:, k], o.s, o.offset)
+        return IntRun(pre=pre, out=out, flags=flags)
+
+    # ---- description -------------------------------------------------------------------------------
+    def symmetry_text(self) -> str:
+        return "; ".join(f"{name}: {s.label()}" for name, s in zip(self.problem.outputs, self.sym))
+
+    def describe(self) -> str:
+        c = self.config
+        deg = f"degree {c['degree']}"
+        if "degree_x" in c or "degree_y" in c:
+            deg += f" (x <= {c.get('degree_x', c['degree'])}, y <= {c.get('degree_y', c['degree'])})"
+        n = sum(len(k) + 1 for _, k in self.coefs) if hasattr(self, "coefs") else 0
+        return (f"poly {deg}, {c['fit']}, {c['coef_bits']}-bit coefficients{', split' if c['split'] else ''}, "
+                f"{n} coefficients; {self.symmetry_text() if hasattr(self, 'sym') else ''}")
+
+    @property
+    def n_coefficients(self) -> int:
+        return sum(len(k) + 1 for _, k in self.coefs)
+
+    def model_bytes(self) -> int:
+        """Constants in the code: int16 coefficients (int32 in 32-bit mode), int32 sums."""
+        cb = 2 if self.config["coef_bits"] == 16 else 4
+        n = sum(cb if isinstance(st.L, int) or (st.K and self.config["coef_bits"] == 32) else 0
+                for st in self.prog.steps)
+        n += sum(2 for st in self.prog.steps if isinstance(st.b, int))
+        n += sum(4 + sum(2 for _, b, _ in o.terms if isinstance(b, int)) for o in self.prog.outs)
+        return n
+
+    # ---- C and cost ----------------------------------------------------------------------------------
+    def render_source(self) -> str:
+        from nnik.implementations import poly_avr, poly_c
+        from nnik.implementations.c_common import comment_safe
+        from nnik.implementations.poly_p18 import p18_body
+        from nnik.implementations.c_common import environment
+
+        p = self.problem
+        name = p.name
+        shift_text = [f">> {m.k}" if m.k > 0 else (f"<< {-m.k}" if m.k < 0 else "") for m in self.maps]
+        outs = [{"label": comment_safe(p.outputs[k]), "shape": plan.shape, "offset": o.offset, "s": o.s,
+                 "nterms": len(self.coefs[k][1]) + 1}
+                for k, (plan, o) in enumerate(zip(self.plans, self.prog.outs))]
+        return environment().get_template("poly_ik.c.j2").render(
+            name=name, NAME=name.upper(), scenario=comment_safe(p.scn.name), describe=comment_safe(self.describe()),
+            maps=self.maps, shift_text=shift_text, symmetry=comment_safe(self.symmetry_text()), outs=outs,
+            values=poly_c.values(self.prog), input_lines=poly_c.input_lines(self.maps, p.lo, p.hi),
+            c_steps=poly_c.portable_steps(self.prog),
+            c_out=poly_c.output_lines(self.prog, p.code_range, lambda a, b: f"(int32_t){a} * {b}"),
+            avr_steps=poly_c.avr_steps(self.prog, name),
+            avr_in=poly_c.input_lines(self.maps, p.lo, p.hi, name=name),
+            avr_out=poly_c.output_lines(self.prog, p.code_range, lambda a, b: f"{name}_mul({a}, {b})", name=name),
+            avr_asm=poly_avr.body(self.prog, self._dac_lines()), p18_body=p18_body(self))
+
+    def _dac_lines(self, indent: str = "    ") -> list[str]:
+        from nnik.implementations.c_common import i32
+
+        cr = self.problem.code_range
+        if cr is None:
+            return []
+        lo, hi = i32(cr[0]), i32(cr[1])
+        return [f"{indent}if (out[{k}] < {lo}) out[{k}] = {lo};\n{indent}else if (out[{k}] > {hi}) out[{k}] = {hi};"
+                for k in range(2)]
+
+    def estimate(self, target: str) -> dict:
+        from nnik.implementations.poly_cost import estimate
+
+        return estimate(self, target)
+
+
+IMPLEMENTATION = PolyImpl
