@@ -52,7 +52,7 @@ from typing import Iterator, Mapping, Sequence
 import numpy as np
 
 from nnik.errors import NnikError
-from nnik.templating import RUNTIME as RUNTIME_DIR
+from nnik.emit.templating import RUNTIME as RUNTIME_DIR
 
 Q_IN = 12  # input Q3.12
 Q_OUT = 15  # output Q15
@@ -960,7 +960,7 @@ def _c_int_list(vals: Sequence[int], per_line: int = 10, indent: str = "    ") -
 
 def render_tanh_c(variant: str | Variant | None = None, prefix: str = "nnik") -> str:
     """C99 source of ``static int16_t {prefix}_tanh(int16_t v)`` and its flash tables."""
-    from nnik.templating import environment
+    from nnik.emit.templating import environment
 
     var = get_variant(variant)
     if not prefix.isidentifier():

@@ -53,7 +53,7 @@ import numpy as np
 
 from nnik.domain import clamp_um, domain_um
 from nnik.errors import NnikError
-from nnik.templating import CODEGEN, RUNTIME, environment
+from nnik.emit.templating import CODEGEN, RUNTIME, environment
 from nnik.scenario import Scenario
 
 RUNTIME_DIR = RUNTIME

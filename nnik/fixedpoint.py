@@ -40,7 +40,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from nnik import activations
-from nnik import kernel as kern
+from nnik.emit import kernel as kern
 from nnik.data import exact_targets
 from nnik.domain import domain_um, round_half_up_shift
 from nnik.errors import NnikError

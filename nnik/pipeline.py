@@ -144,7 +144,7 @@ def export(outdir: Path):
     comparison, OUTDIR/c/mlp/<other kernel>/NAME.{h,c}, and the baselines in OUTDIR/c/;
     returns both integer models (scenario's kernel first)."""
     from nnik import fixedpoint as fx
-    from nnik.export import render_model_c, write_sources
+    from nnik.emit.export import render_model_c, write_sources
 
     model = TrainedModel.load(outdir / MODEL_FILE)
     ds = Dataset.load(outdir / DATA_FILE)
@@ -185,7 +185,7 @@ def mlp_flash_bytes(im) -> int:
 def _export_baselines(scn, im, ds, c_dir: Path, in_um: np.ndarray, truth: np.ndarray) -> dict:
     """Write NAME_float.{h,c} (where a closed form exists) and NAME_lut.{h,c}; their accuracy."""
     from nnik import baselines as bl
-    from nnik.export import write_sources
+    from nnik.emit.export import write_sources
 
     out: dict = {}
     reason = bl.float_unavailable_reason(scn)

@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 
 from nnik.errors import NnikError
-from nnik.export import CODEGEN
+from nnik.emit.templating import CODEGEN
 from nnik.fixedpoint import IntegerModel
 
 HOST_FLAGS = ["-std=c99", "-pedantic", "-Wall", "-Wextra", "-Werror", "-O1",

@@ -12,7 +12,7 @@ import pytest
 from nnik import fixedpoint as fx
 from nnik import pipeline
 from nnik.data import Dataset
-from nnik.export import render_model_c, write_sources
+from nnik.emit.export import render_model_c, write_sources
 from nnik.train import TrainedModel
 from nnik.verify_host import run_host, verification_inputs, verify_host
 from tests.conftest import require_tool

@@ -148,7 +148,7 @@ def test_kernel_option_is_validated(galvo_model):
 
 
 def test_fast_kernel_galvo_accuracy_and_formats(galvo_model):
-    from nnik import kernel as kern
+    from nnik.emit import kernel as kern
 
     im = _fast(galvo_model)
     assert im.kernel == "fast"
@@ -188,7 +188,7 @@ def test_fast_kernel_range_proof(galvo_model):
 
 
 def test_fast_tanh_tables():
-    from nnik import kernel as kern
+    from nnik.emit import kernel as kern
 
     T = np.arange(-32768, 32768)
     for m, s in ((0, 8), (1, 8), (2, 7), (3, 6), (3, 8)):

@@ -1,36 +1,25 @@
-"""Features of the "fast" kernel (nnik.kernel, nnik.fastc): unrolled, weights as constants in
+"""Features of the "fast" kernel (nnik.emit.kernel, nnik.emit.fastc): unrolled, weights as constants in
 the code, prefixed by the code path ("asm" or "c") each target takes."""
 
 from __future__ import annotations
 
 import numpy as np
 
+from nnik.emit import fastc, fastc_avr, fastc_p18
 from nnik.estimate.structure import structure
 from nnik.estimate.trace import dac_hits, hidden_trace, tanh_class_index, tanh_classes
 
-UNROLL_MAX_WEIGHTS_DEFAULT = 256
+ASM_BODIES = {"avr": fastc_avr, "pic18": fastc_p18}
 
 
 def fast_path(im, target: str | None) -> str:
     """"asm" when the target's hand-written body applies to the model, else "c" (value code)."""
-    mod = {"avr": "nnik.fastc_avr", "pic18": "nnik.fastc_p18"}.get(target or "")
-    if mod is None:
-        return "c"
-    try:
-        import importlib
-
-        return "asm" if importlib.import_module(mod).supported(im) else "c"
-    except (ImportError, AttributeError):
-        return "c"
+    mod = ASM_BODIES.get(target or "")
+    return "asm" if mod is not None and mod.supported(im) else "c"
 
 
 def _unroll_max() -> int:
-    try:
-        from nnik import fastc
-
-        return int(getattr(fastc, "UNROLL_MAX_WEIGHTS", UNROLL_MAX_WEIGHTS_DEFAULT))
-    except ImportError:
-        return UNROLL_MAX_WEIGHTS_DEFAULT
+    return int(fastc.UNROLL_MAX_WEIGHTS)
 
 
 def _tanh_key(im, L) -> str:

@@ -10,7 +10,7 @@ from nnik.errors import NnikError
 from nnik.estimate.fast_features import fast_path
 from nnik.estimate.features import (cycle_features, flash_features, is_far, predict_frame, ram_features,
                                     size_features)
-from nnik.estimate.kernels import accepts, kernel_key, model_kernel
+from nnik.estimate.kernels import kernel_key, model_kernel
 from nnik.estimate.calibrations import (CLOCKS_PER_CYCLE, GOAL_CYCLES_PCT, GOAL_FLASH_PCT, load_calibration,
                                     resolve_profile)
 from nnik.estimate.shifts import shift_offset
@@ -205,5 +205,4 @@ def load_integer_model(path: Path, tanh: str | None = None, weight_bits: int | N
         ds = Dataset.load(dp)
         calib = fx.calibration_set(model, ds.p["train"], ds.q["train"])
     kernel = kernel or scn.export.get("kernel")
-    kw = {"kernel": kernel} if kernel and accepts(fx.quantize, "kernel") else {}
-    return fx.quantize(model, tanh_variant=tanh, weight_bits=wb, calib=calib, **kw)
+    return fx.quantize(model, tanh_variant=tanh, weight_bits=wb, calib=calib, kernel=kernel or None)

@@ -12,7 +12,7 @@ SHIFT_GROUPS = (("rs", "rn", "as", "sl"), ("rsc", "rnc", "asc"))
 
 def shift_bench_c(group: int) -> tuple[str, str]:
     """(name, C source) of the shift microbenchmark program of one group."""
-    from nnik.templating import environment
+    from nnik.emit.templating import environment
 
     name = f"nnik_shiftbench{group}"
     return name, environment().get_template("shift_bench.c.j2").render(name=name, shifts=list(SHIFTS),

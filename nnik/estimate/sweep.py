@@ -11,7 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
-from nnik.estimate.kernels import accepts, kernel_key, model_kernel, write_c
+from nnik.estimate.kernels import kernel_key, model_kernel, write_c
 from nnik.estimate.measure import run_profile
 from nnik.estimate.predict import estimate
 from nnik.estimate.calibrations import (BUILTIN_PROFILES, DEFAULT_KERNEL_KEY, REPO_ROOT, TARGETS, cal_path,
@@ -47,9 +47,8 @@ def sweep_model(hidden: tuple[int, ...], tanh: str | None, cache: Path = SWEEP_D
         pipeline.train(scn, out, progress=False)
     model = TrainedModel.load(out / pipeline.MODEL_FILE)
     ds = Dataset.load(out / pipeline.DATA_FILE)
-    kw = {"kernel": kernel} if kernel is not None and accepts(fx.quantize, "kernel") else {}
     return fx.quantize(model, tanh_variant=tanh or None, calib=fx.calibration_set(model, ds.p["train"], ds.q["train"]),
-                       **kw)
+                       kernel=kernel)
 
 
 def sweep(targets: Iterable[str] = TARGETS, archs: Sequence[tuple[int, ...]] = SWEEP_ARCHS,

@@ -12,7 +12,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from nnik.errors import NnikError
-from nnik.estimate.kernels import accepts
 from nnik.estimate.calibrations import REPO_ROOT
 
 DATASETS = REPO_ROOT / "datasets"
@@ -167,9 +166,9 @@ def synthetic_model(spec: CalSpec, kernel: str | None = None):
                     hl.weight.mul_(torch.from_numpy(keep.astype(np.float64)))
             m.bias.copy_(torch.from_numpy(rng.normal(0, 0.3, tuple(m.bias.shape))))
         tm = TrainedModel(net, sc, scn)
-        kw = {"kernel": kernel} if kernel is not None and accepts(fx.quantize, "kernel") else {}
         try:
-            return fx.quantize(tm, tanh_variant=spec.tanh or None, weight_bits=spec.weight_bits, refit=False, **kw)
+            return fx.quantize(tm, tanh_variant=spec.tanh or None, weight_bits=spec.weight_bits, refit=False,
+                               kernel=kernel)
         except NnikError as exc:  # a random draw that overflows a format: draw again
             last_err = exc
     raise NnikError(f"calibration network {spec.label}: {last_err}")

@@ -18,7 +18,7 @@ import pytest
 
 from nnik import fixedpoint as fx
 from nnik.data import Dataset
-from nnik.export import render_model_c, write_sources
+from nnik.emit.export import render_model_c, write_sources
 from nnik.targets import run_on_target
 from tests.targets.runner_helpers import need_toolchain
 from nnik.train import TrainedModel

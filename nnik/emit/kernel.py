@@ -18,8 +18,8 @@ oracle), but its formats are chosen so that an 8-bit CPU does little besides mul
   are the same integers);
 * residual models prefer an affine base floor(d A / 2^16) (a byte-aligned 48-bit product).
 
-The C: nnik.fastc (portable C99 body) with nnik.fastc_avr (one avr-gcc asm statement) and
-nnik.fastc_p18 (one SDCC pic16 __asm__), on the primitives of codegen/runtime/nnik_kernel.h.
+The C: nnik.emit.fastc (portable C99 body) with nnik.emit.fastc_avr (one avr-gcc asm statement) and
+nnik.emit.fastc_p18 (one SDCC pic16 __asm__), on the primitives of codegen/runtime/nnik_kernel.h.
 
 Table contract (``ulerp``): input T int16 in Q(15-m) (x = T / 2^(15-m)); ``Tu = T + 32768``
 (uint16), ``i = Tu >> s``, ``f = (Tu & (2^s - 1)) << (8 - s)`` (8-bit fraction);

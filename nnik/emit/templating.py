@@ -7,7 +7,7 @@ from pathlib import Path
 
 import jinja2
 
-CODEGEN = Path(__file__).resolve().parent.parent / "codegen"
+CODEGEN = Path(__file__).resolve().parents[2] / "codegen"
 TEMPLATES = CODEGEN / "templates"
 RUNTIME = CODEGEN / "runtime"
 

@@ -1,4 +1,4 @@
-"""C for the "fast" kernel (nnik.kernel): NAME.c from an IntegerModel quantised with kernel="fast".
+"""C for the "fast" kernel (nnik.emit.kernel): NAME.c from an IntegerModel quantised with kernel="fast".
 
 The network is unrolled with its weights as constants in the code; every operation is a
 primitive of codegen/runtime/nnik_kernel.h (avr-gcc asm, SDCC pic16 asm, portable C).  Two
@@ -11,7 +11,9 @@ from __future__ import annotations
 import numpy as np
 
 from nnik import activations
-from nnik import kernel as kern
+from nnik.emit import fastc_avr, fastc_p18
+from nnik.emit import kernel as kern
+from nnik.emit.templating import environment
 from nnik.errors import NnikError
 from nnik.fixedpoint import ACT_FRAC, IntegerModel
 
@@ -268,17 +270,11 @@ def _value_body(cx: _Ctx) -> tuple[str, list[str]]:
 
 def render(im: IntegerModel, scenario_source: str) -> dict[str, str]:
     """{filename: text} for NAME.h and NAME.c of a model quantised with kernel="fast"."""
-    from nnik.export import environment
-
     if im.kernel != "fast":
         raise NnikError("fastc.render needs a model quantised with kernel='fast'")
     cx = _Ctx(im)
     c_body, weight_tables = _value_body(cx)
-    from nnik import fastc_avr
-
     avr_body = fastc_avr.body(cx, _start, _out_start)
-    from nnik import fastc_p18
-
     p18_body = fastc_p18.body(cx, _start, _out_start) or ""
     p18_ok = "1" if p18_body else "0"
     tables = []

@@ -5,17 +5,15 @@ from __future__ import annotations
 import shutil
 from pathlib import Path
 
-import jinja2
 import numpy as np
 
 from nnik import activations
-from nnik import kernel as kern
+from nnik.emit import fastc
+from nnik.emit import kernel as kern
+from nnik.emit.templating import RUNTIME, environment
 from nnik.errors import NnikError
 from nnik.fixedpoint import ACT_FRAC, IntegerModel
 
-CODEGEN = Path(__file__).resolve().parent.parent / "codegen"
-TEMPLATES = CODEGEN / "templates"
-RUNTIME = CODEGEN / "runtime"
 RUNTIME_HEADERS = ("nnik_flash.h", "nnik_kernel.h")  # copied next to every generated file
 
 
@@ -23,16 +21,6 @@ def c_list(values, per_line: int = 10, suffix: str = "") -> str:
     vals = [f"{int(v)}{suffix}" for v in np.asarray(values).ravel()]
     rows = [", ".join(vals[i:i + per_line]) for i in range(0, len(vals), per_line)]
     return ",\n".join("    " + r for r in rows)
-
-
-def environment() -> jinja2.Environment:
-    return jinja2.Environment(
-        loader=jinja2.FileSystemLoader(str(TEMPLATES)),
-        undefined=jinja2.StrictUndefined,
-        trim_blocks=True,
-        lstrip_blocks=True,
-        keep_trailing_newline=True,
-    )
 
 
 def render_model_c(im: IntegerModel, scenario_source: str, kernel: str | None = None) -> dict[str, str]:
@@ -47,8 +35,6 @@ def render_model_c(im: IntegerModel, scenario_source: str, kernel: str | None = 
         raise NnikError(f"render_model_c: the model was quantised for kernel {im.kernel!r}, not {kernel!r} "
                         f"(quantize(..., kernel={kernel!r}))")
     if kernel == "fast":
-        from nnik import fastc
-
         return fastc.render(im, scenario_source)
     o = im.out
     ctx = dict(

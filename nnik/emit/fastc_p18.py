@@ -11,7 +11,7 @@ outputs.  Anything else uses the value code (portable C) on PIC18 too.
 
 from __future__ import annotations
 
-from nnik import fastc_avr
+from nnik.emit import fastc_avr
 from nnik.fixedpoint import ACT_FRAC
 
 # byte offsets in the work struct
