@@ -1,0 +1,181 @@
+"""The ``lut`` family: a bilinear table with power-of-two cells, node values fitted by least
+squares or minimax over dense points, a half or quarter table where the exact IK's own
+symmetry allows it (see :mod:`nnik.implementations.lut_table` for the integer contract).
+
+Knobs (``config``):
+    k         [kx, ky]: cell size exponents, cells of 2^k input units
+    bits      16 | 32: entry width
+    W         16 | 8: bits of the cell fraction (8 is cheaper, coarser within a cell)
+    fit       "lsq" | "minimax"
+    symmetry  true | false: fold the axes the numerical symmetry check allows
+    fb        optional: force the fractional bits of the entries (else range analysis)
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from nnik.errors import NnikError
+from nnik.implementations.base import Implementation, IntRun
+from nnik.implementations.c_common import c_list, comment_safe, i32
+from nnik.implementations.lut_table import Grid, Table, detect_parity, fit_nodes, quantise
+from nnik.implementations.problem import Problem
+
+DEFAULTS = {"bits": 16, "W": 16, "fit": "lsq", "symmetry": True}
+
+
+def fold_plan(problem: Problem, symmetry: bool) -> tuple[tuple[bool, bool], np.ndarray]:
+    """(fold per axis, odd[o, a]): an axis is folded when every output is even or odd in it."""
+    par = problem.cache.get("lut_parity")
+    if par is None:
+        par = problem.cache["lut_parity"] = detect_parity(problem)
+    fold = tuple(bool(symmetry) and all(par[o][a] is not None for o in range(2)) for a in range(2))
+    odd = np.array([[fold[a] and par[o][a] == "odd" for a in range(2)] for o in range(2)])
+    return fold, odd
+
+
+def fit_points(problem: Problem, grid: Grid) -> tuple[np.ndarray, np.ndarray]:
+    """Points (input units) and targets to fit: integer points of a dense grid (at least 8 per
+    cell) plus the training set, with the exact IK; measured rows as they are."""
+    if not problem.analytic:
+        return problem.fit_samples()
+    n = int(min(1201, max(161, 8 * max(grid.n) + 1)))
+    key = ("lut_fit", n)
+    if key not in problem.cache:
+        p, _ = problem.fit_samples(n)
+        pts = np.unique(np.clip(np.rint(p), problem.lo, problem.hi).astype(np.int64), axis=0)
+        problem.cache[key] = (pts, problem.truth(pts))
+    return problem.cache[key]
+
+
+def fold_targets(grid: Grid, odd: np.ndarray, pts: np.ndarray, q: np.ndarray):
+    """Fold points and targets onto the stored part of the table (odd outputs change sign)."""
+    t = np.empty(pts.shape, dtype=np.float64)
+    qf = np.array(q, dtype=np.float64)
+    for a in range(2):
+        if grid.fold[a]:
+            t[:, a] = np.abs(pts[:, a])
+            neg = pts[:, a] < 0
+            for o in range(2):
+                if odd[o, a]:
+                    qf[neg, o] = -qf[neg, o]
+        else:
+            t[:, a] = pts[:, a] - grid.origin[a]
+    return t, qf
+
+
+def build_table(problem: Problem, cfg: dict, targets=None, symmetry: bool | None = None) -> Table:
+    """Grid, fit and range analysis for a config; `targets` (pts, q) overrides the data (the
+    hybrid's residual)."""
+    sym = cfg.get("symmetry", True) if symmetry is None else symmetry
+    fold, odd = fold_plan(problem, sym)
+    grid = Grid.make(problem.lo, problem.hi, cfg["k"], fold, int(cfg.get("W", 16)))
+    pts, q = fit_points(problem, grid) if targets is None else targets
+    t, qf = fold_targets(grid, odd, np.asarray(pts, dtype=np.float64), q)
+    vals, _ = fit_nodes(grid, t, qf, odd, cfg.get("fit", "lsq"), measured=not problem.analytic)
+    return quantise(grid, vals, int(cfg.get("bits", 16)), odd, cfg.get("fb"))
+
+
+def k_for_nodes(span: int, nodes: int) -> int:
+    """The cell exponent that gives about `nodes` nodes over `span`."""
+    return max(0, int(math.ceil(math.log2(max(1.0, span / max(1, nodes - 1))))))
+
+
+def table_ctx(problem: Problem, tab: Table) -> dict:
+    """What the C template needs about the table."""
+    rows = []
+    n0, n1 = tab.grid.n
+    for o in range(2):
+        rows.append(c_list(tab.ent[o].ravel(), per_line=n0 if n0 <= 16 else 16))
+    flipmask = [sum(1 << o for o in range(2) if tab.odd[o, a]) for a in range(2)]
+    return {"tab": tab, "rows": rows, "ctype": f"int{tab.bits}_t",
+            "rd": "NNIK_RD_I16" if tab.bits == 16 else "NNIK_RD_I32", "flipmask": flipmask,
+            "origin": [i32(v) for v in tab.grid.origin],
+            "oddtxt": [" and ".join(v for a, v in enumerate("xy") if tab.odd[o, a]) for o in range(2)]}
+
+
+class LutImpl(Implementation):
+    family = "lut"
+    doc = "bilinear table, power-of-two cells, least-squares or minimax nodes, symmetry folds"
+
+    def __init__(self, problem: Problem, config: dict, table: Table | None = None):
+        super().__init__(problem, config)
+        self.table = table
+
+    # ---- fitting -------------------------------------------------------------------------------
+    @classmethod
+    def ladder(cls, problem: Problem) -> list[dict]:
+        fold, _ = fold_plan(problem, True)
+        span = [int(problem.hi[a]) if fold[a] else int(problem.hi[a] - problem.lo[a]) for a in range(2)]
+        out = []
+        for nodes in (6, 9, 14, 20, 28, 40):
+            k = [k_for_nodes(span[a], nodes) for a in range(2)]
+            for bits in (16, 32):
+                out.append({"k": k, "bits": bits, "W": 16, "fit": "lsq", "symmetry": True})
+        return out
+
+    @classmethod
+    def fit(cls, problem: Problem, config: dict) -> "LutImpl":
+        cfg = {**DEFAULTS, **config}
+        if "k" not in cfg:
+            raise NnikError("lut config needs k = [kx, ky] (cell size exponents)")
+        cfg["k"] = [int(v) for v in cfg["k"]]
+        return cls(problem, cfg, build_table(problem, cfg))
+
+    # ---- the integer model ------------------------------------------------------------------------
+    def run(self, in_units: np.ndarray) -> IntRun:
+        p = self.problem
+        c, flags = p.clamp(in_units)
+        acc = self.table.acc(c)
+        pre = np.empty(acc.shape)
+        out = np.empty(acc.shape, dtype=np.int64)
+        for o in range(2):
+            s = self.table.shift[o]
+            pre[:, o] = self.table.offset[o] + acc[:, o] / 2.0**s
+            out[:, o] = p.finish(acc[:, o], s, self.table.offset[o])
+        return IntRun(pre=pre, out=out, flags=flags)
+
+    # ---- C ----------------------------------------------------------------------------------------
+    def final_stage(self) -> dict:
+        t = self.table
+        return {"final_shift": list(t.shift), "final_off": [i32(v) for v in t.offset],
+                "final_off_int": [int(v) for v in t.offset],
+                "half": [i32(1 << (s - 1)) if s > 0 else None for s in t.shift], "base": None}
+
+    def render_source(self) -> str:
+        from nnik.implementations import lut_avr, lut_p18
+        from nnik.emit.templating import environment
+
+        p = self.problem
+        t = self.table
+        ctx = dict(name=p.name, NAME=p.name.upper(), scenario=comment_safe(p.scn.name), family=self.family,
+                   title=comment_safe(self.describe()), outputs=p.outputs,
+                   lo=[i32(v) for v in p.lo], hi=[i32(v) for v in p.hi], code_range=p.code_range,
+                   code_lo=i32(p.code_range[0]) if p.code_range else None,
+                   code_hi=i32(p.code_range[1]) if p.code_range else None, **table_ctx(p, t),
+                   **self.final_stage())
+        ctx["avr_body"] = lut_avr.body(self, ctx)
+        ctx["p18_body"] = lut_p18.body(self, ctx)
+        return environment().get_template("lut2_ik.c.j2").render(**ctx)
+
+    # ---- cost -------------------------------------------------------------------------------------
+    def model_bytes(self) -> int:
+        return self.table.nbytes
+
+    def estimate(self, target: str) -> dict:
+        from nnik.implementations.lut_cost import estimate
+
+        return estimate(self, target)
+
+    def describe(self) -> str:
+        t = self.table
+        g = t.grid
+        fold = "".join(a for a, f in zip("xy", g.fold) if f)
+        sym = f", folded in {fold}" if fold else ""
+        return (f"lut {g.n[0]}x{g.n[1]} int{t.bits} (cells 2^{g.k[0]} x 2^{g.k[1]}, Q{g.W} fraction, "
+                f"{self.config.get('fit', 'lsq')}{sym})")
+
+
+IMPLEMENTATION = LutImpl

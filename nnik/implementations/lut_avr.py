@@ -1,0 +1,218 @@
+"""AVR (avr-gcc) body of the bilinear table: one asm statement on the hardware multiplier.
+
+Registers (gcc saves the call-saved ones listed as clobbered):
+    r18-r21 A accumulator (also the input stage)   r22:r23 U weight copy (MULSU needs r16-r23)
+    r16:r17 D difference   r24:r25 F e01   r14:r15 E e00 (r10:r11 its high word, int32)
+    r2:r3 a = fx - w11   r4:r5 fy   r6:r7 w11 (ix before)   r8 zero   r9 flip bits
+    Z in_um, then the table   X out   T: an input was clamped
+Cycle counts in the comments are for the straight-line path.
+"""
+
+from __future__ import annotations
+
+A = ("r18", "r19", "r20", "r21")
+U = ("r22", "r23")
+D = ("r16", "r17")
+F = ("r24", "r25")
+E = ("r14", "r15", "r10", "r11")
+AW, FY, W11 = ("r2", "r3"), ("r4", "r5"), ("r6", "r7")
+ZERO, NEG = "r8", "r9"
+
+
+def _macsu(W: int, u) -> list[str]:
+    """A += U * D, U unsigned (W bits), D signed 16 (modulo 2^32)."""
+    z = ZERO
+    if W == 8:
+        return [f"mov {U[0]}, {u[0]}",
+                f"mul {D[0]}, {U[0]}", f"add {A[0]}, r0", f"adc {A[1]}, r1", f"adc {A[2]}, {z}", f"adc {A[3]}, {z}",
+                f"mulsu {D[1]}, {U[0]}", f"sbc {A[3]}, {z}", f"add {A[1]}, r0", f"adc {A[2]}, r1", f"adc {A[3]}, {z}"]
+    return [f"movw {U[0]}, {u[0]}",
+            f"mul {U[0]}, {D[0]}", f"add {A[0]}, r0", f"adc {A[1]}, r1", f"adc {A[2]}, {z}", f"adc {A[3]}, {z}",
+            f"mul {U[1]}, {D[0]}", f"add {A[1]}, r0", f"adc {A[2]}, r1", f"adc {A[3]}, {z}",
+            f"mulsu {D[1]}, {U[0]}", f"sbc {A[3]}, {z}", f"add {A[1]}, r0", f"adc {A[2]}, r1", f"adc {A[3]}, {z}",
+            f"mulsu {D[1]}, {U[1]}", f"add {A[2]}, r0", f"adc {A[3]}, r1"]
+
+
+def add_const(regs, k: int) -> list[str]:
+    """regs (upper registers, low byte first) += k, modulo 2^(8 len)."""
+    m = (-int(k)) & ((1 << (8 * len(regs))) - 1)
+    ops = ["lo8", "hi8", "hlo8", "hhi8"]
+    return [f"{'subi' if i == 0 else 'sbci'} {r}, {ops[i]}({m})" for i, r in enumerate(regs)]
+
+
+def negate(regs) -> list[str]:
+    regs = list(regs)
+    return ([f"com {r}" for r in reversed(regs[1:])] + [f"neg {regs[0]}"]
+            + [f"sbci {r}, 0xFF" for r in regs[1:]])
+
+
+def sar_to(regs, s: int, tmp: str) -> list[str]:
+    """regs (4 bytes, int32) = regs >> s (arithmetic)."""
+    q, r = divmod(s, 8)
+    code = [f"mov {regs[i]}, {regs[i + q]}" for i in range(4 - q)] if q else []
+    top = 3 - q
+    for _ in range(r):
+        code += [f"asr {regs[top]}"] + [f"ror {regs[i]}" for i in range(top - 1, -1, -1)]
+    if q:
+        code += [f"mov {tmp}, {regs[top]}", f"lsl {tmp}", f"sbc {tmp}, {tmp}"]
+        code += [f"mov {regs[j]}, {tmp}" for j in range(top + 1, 4)]
+    return code
+
+
+def _align(k: int) -> list[str]:
+    """r20:r19:r18 = t -> t * 2^(16 - k): i in r20, the Q16 fraction in r19:r18."""
+    a0, a1, a2 = A[:3]
+    n = 16 - k
+    code = []
+    if n >= 8:
+        code += [f"mov {a2}, {a1}", f"mov {a1}, {a0}", f"clr {a0}"]
+        n -= 8
+    elif n <= -8:
+        code += [f"mov {a0}, {a1}", f"mov {a1}, {a2}", f"clr {a2}"]
+        n += 8
+    for _ in range(max(n, 0)):
+        code += [f"lsl {a0}", f"rol {a1}", f"rol {a2}"]
+    for _ in range(max(-n, 0)):
+        code += [f"lsr {a2}", f"ror {a1}", f"ror {a0}"]
+    return code
+
+
+def input_stage(impl, flipmask) -> list[str]:
+    """Both inputs: clamp (T flag), fold, align; leaves ix in r6, fx in r2(:r3), iy in r20,
+    fy in r4(:r5)."""
+    p = impl.problem
+    g = impl.table.grid
+    code = ["clr " + ZERO, "clr " + NEG, "clt"]
+    for a in range(2):
+        lo, hi = int(p.lo[a]), int(p.hi[a])
+        code.append(f"nnik_inw {', '.join(A)}, {lo}, {hi - lo}, {U[0]}")
+        if g.fold[a]:
+            code += add_const(A[:3], lo)  # t = w + lo = x (signed 24-bit)
+            code += ["brpl 1f"] + negate(A[:3])
+            if flipmask[a]:
+                code += [f"ldi {U[0]}, {flipmask[a]}", f"eor {NEG}, {U[0]}"]
+            code.append("1:")
+        elif g.origin[a] != lo:
+            raise AssertionError("unfolded axis starts at lo")
+        code += _align(g.k[a])
+        if a == 0:
+            code += [f"mov {W11[0]}, {A[2]}"]
+            code += [f"movw {AW[0]}, {A[0]}"] if g.W == 16 else [f"mov {AW[0]}, {A[1]}"]
+        else:
+            code += [f"movw {FY[0]}, {A[0]}"] if g.W == 16 else [f"mov {FY[0]}, {A[1]}"]
+    return code
+
+
+def weights(W: int) -> list[str]:
+    """w11 = (fx fy) >> W, a = fx - w11."""
+    if W == 8:
+        return [f"mul {AW[0]}, {FY[0]}", f"mov {W11[0]}, r1", f"sub {AW[0]}, {W11[0]}"]
+    return [f"mul {AW[1]}, {FY[1]}", f"movw {W11[0]}, r0",
+            f"mul {AW[0]}, {FY[0]}", f"mov {U[0]}, r1",
+            f"mul {AW[1]}, {FY[0]}", f"add {U[0]}, r0", f"adc {W11[0]}, r1", f"adc {W11[1]}, {ZERO}",
+            f"mul {AW[0]}, {FY[1]}", f"add {U[0]}, r0", f"adc {W11[0]}, r1", f"adc {W11[1]}, {ZERO}",
+            f"sub {AW[0]}, {W11[0]}", f"sbc {AW[1]}, {W11[1]}"]
+
+
+def pointer(tab) -> list[str]:
+    """Z = table + (iy NX + ix) * entry bytes (ix in r6, iy in r20)."""
+    g = tab.grid
+    B = tab.bits // 8
+    code = [f"ldi {U[0]}, {g.n[0]}", f"mul {A[2]}, {U[0]}", f"add r0, {W11[0]}", f"adc r1, {ZERO}"]
+    code += ["lsl r0", "rol r1"] * (B.bit_length() - 1)
+    code += ["movw r30, r0", "subi r30, lo8(-(%[tab]))", "sbci r31, hi8(-(%[tab]))"]
+    return code
+
+
+def output_acc(tab, o: int) -> list[str]:
+    """Table part of output o: acc in A (Z at the cell of output o on entry; on exit Z is the
+    cell + NX + 2 entries)."""
+    g = tab.grid
+    B = tab.bits // 8
+    W = g.W
+    skip = ["adiw r30, 2"] if B == 4 else []
+    code = [f"lpm {E[0]}, Z+", f"lpm {E[1]}, Z+"]
+    if B == 4:
+        code += [f"lpm {E[2]}, Z+", f"lpm {E[3]}, Z+"] + [f"clr {r}" for r in A]
+    elif W == 16:
+        code += [f"clr {A[0]}", f"clr {A[1]}", f"movw {A[2]}, {E[0]}"]
+    else:
+        code += [f"clr {A[0]}", f"mov {A[1]}, {E[0]}", f"mov {A[2]}, {E[1]}",
+                 f"mov {A[3]}, {E[1]}", f"lsl {A[3]}", f"sbc {A[3]}, {A[3]}"]
+    code += [f"lpm {D[0]}, Z+", f"lpm {D[1]}, Z+"] + skip + [f"sub {D[0]}, {E[0]}", f"sbc {D[1]}, {E[1]}"]
+    code += _macsu(W, AW)
+    adj = g.n[0] * B - 2 * B
+    code += [f"subi r30, lo8({-adj})", f"sbci r31, hi8({-adj})"]
+    code += [f"lpm {F[0]}, Z+", f"lpm {F[1]}, Z+"] + skip
+    code += [f"movw {D[0]}, {F[0]}", f"sub {D[0]}, {E[0]}", f"sbc {D[1]}, {E[1]}"] + _macsu(W, FY)
+    code += [f"lpm {D[0]}, Z+", f"lpm {D[1]}, Z+"] + skip + [f"sub {D[0]}, {F[0]}", f"sbc {D[1]}, {F[1]}"]
+    code += _macsu(W, W11)
+    if B == 4:  # acc = e00 + (S >> W)
+        if W == 16:
+            code += [f"movw {D[0]}, {A[2]}", f"clr {F[0]}", f"sbrc {D[1]}, 7", f"com {F[0]}",
+                     f"movw {A[0]}, {E[0]}", f"movw {A[2]}, {E[2]}",
+                     f"add {A[0]}, {D[0]}", f"adc {A[1]}, {D[1]}", f"adc {A[2]}, {F[0]}", f"adc {A[3]}, {F[0]}"]
+        else:
+            code += [f"mov {D[0]}, {A[1]}", f"mov {D[1]}, {A[2]}", f"mov {F[0]}, {A[3]}", f"clr {F[1]}",
+                     f"sbrc {F[0]}, 7", f"com {F[1]}", f"movw {A[0]}, {E[0]}", f"movw {A[2]}, {E[2]}",
+                     f"add {A[0]}, {D[0]}", f"adc {A[1]}, {D[1]}", f"adc {A[2]}, {F[0]}", f"adc {A[3]}, {F[1]}"]
+    if tab.odd[o].any():
+        code += [f"sbrs {NEG}, {o}", "rjmp 1f"] + negate(A) + ["1:"]
+    return code
+
+
+def finish(o: int, shift: int, offset: int, code_range) -> list[str]:
+    """out[o] = offset + ((A + 2^(s-1)) >> s), DAC clamp, stored to X+."""
+    code = []
+    if shift > 0:
+        code += add_const(A, 1 << (shift - 1)) + sar_to(A, shift, U[0])
+    if offset:
+        code += add_const(A, offset)
+    if code_range is not None:
+        lo, hi = (int(v) for v in code_range)
+        code.append(f"nnik_satge {', '.join(A)}, {hi + 1}, {hi}, {U[0]}")
+        code.append(f"nnik_satlt {', '.join(A)}, {lo}, {lo}, {U[0]}")
+    code += [f"st X+, {r}" for r in A]
+    return code
+
+
+CLOBBERS = ["r0"] + [f"r{i}" for i in range(2, 24)] + ["r25", "memory"]
+
+
+def wrap(lines: list[str], tabsym: str) -> str:
+    asm = "\n".join(f'        "{ln}\\n"' for ln in lines)
+    clob = ", ".join(f'"{c}"' for c in CLOBBERS)
+    return "\n".join([
+        '    register int8_t flag __asm__("r24");',
+        "    const int32_t *pin = in_um;",
+        "    int32_t *pout = out;",
+        "    __asm__ __volatile__ (",
+        "        NNIK_AVR_ASM_MACROS",
+        asm,
+        "        NNIK_AVR_ASM_PURGE",
+        '        : [flag] "=&r" (flag), "+z" (pin), "+x" (pout)',
+        f'        : [tab] "i" ({tabsym})',
+        f"        : {clob});",
+        "    return flag;"])
+
+
+def body(impl, ctx, base_hook=None) -> str:
+    """The whole function body. base_hook(o) -> asm lines turning A (table acc of output o)
+    into the total before rounding (the hybrid's base); Z/X must be preserved by it."""
+    tab = impl.table
+    g = tab.grid
+    code = input_stage(impl, ctx["flipmask"])
+    code += pointer(tab) + weights(g.W)
+    nn = g.n[0] * g.n[1]
+    B = tab.bits // 8
+    for o in range(2):
+        if o == 1:
+            adj = nn * B - (g.n[0] + 2) * B
+            code += [f"subi r30, lo8({-adj})", f"sbci r31, hi8({-adj})"]
+        code += output_acc(tab, o)
+        if base_hook is not None:
+            code += base_hook(o)
+        fin = impl.final_stage()
+        code += finish(o, fin["final_shift"][o], fin["final_off_int"][o], impl.problem.code_range)
+    code += ["clr r1", "clr %[flag]", "bld %[flag], 0"]
+    return wrap(code, f"{impl.problem.name}_tab")
