@@ -163,15 +163,33 @@ def cmd_evaluate(args) -> None:
     print_accuracy(pipeline.evaluate(check_model_dir(args.model_dir)))
 
 
+EVALUATED_KEYS = ("name", "unit", "outputs", "network", "dataset", "float", "affine_only", "onnx")
+
+
+def _evaluated_dir(model_dir) -> Path:
+    """A model directory whose metrics.json `nnik evaluate` wrote (checked before anything runs)."""
+    out = check_model_dir(model_dir, pipeline.C_DIR)
+    missing = [k for k in EVALUATED_KEYS if k not in pipeline.load_metrics(out)]
+    if missing:
+        raise NnikError(f"metrics.json lacks {', '.join(missing)} (run `nnik evaluate` again)", str(out))
+    return out
+
+
 def cmd_export(args) -> None:
-    out = check_model_dir(args.model_dir, pipeline.C_DIR)
+    out = _evaluated_dir(args.model_dir)
     im, _ = pipeline.export(out)
     console.print(f"wrote {out / pipeline.C_DIR}/{im.name}.h and {im.name}.c ({im.weights_bytes()} bytes of tables)")
+    if getattr(args, "arduino", None):
+        from nnik.arduino_export import export_arduino
+
+        lib = export_arduino(out, Path(args.arduino))
+        console.print(f"wrote Arduino library {lib['libname']} to {lib['dir']}/ (examples {lib['name']}_selftest with "
+                      f"{lib['golden']} golden vectors, {lib['name']}_gcode)")
     print_accuracy(pipeline.load_metrics(out))
 
 
 def cmd_verify(args) -> None:
-    out = check_model_dir(args.model_dir, pipeline.C_DIR)
+    out = _evaluated_dir(args.model_dir)
     res = pipeline.verify(out, args.target)
     print_accuracy(pipeline.load_metrics(out))
     if not res.get("bit_exact", False):
@@ -242,6 +260,34 @@ def cmd_synth_csv(args) -> None:
     console.print(f"wrote {args.output}: {n} rows from {scn.source} with {args.noise_um:g} um measurement noise")
 
 
+def cmd_job(args) -> None:
+    from nnik.gcode.job import run_job
+    from nnik.gcode.summary import JOB_HEADER, job_row
+
+    if Path(args.scenario).is_dir():
+        out = Path(args.scenario)
+    else:
+        from nnik.scenario import load_scenario
+
+        scn = load_scenario(args.scenario)
+        out = Path(args.outdir) if args.outdir else pipeline.default_outdir(scn)
+    if not (out / pipeline.MODEL_FILE).is_file():
+        raise NnikError(f"no trained model (run `nnik run {args.scenario}` first)", str(out))
+    res = run_job(out, Path(args.job), seg_um=args.seg_um, use_chip=False if args.no_chip else None)
+    t = Table(title=f"G-code job {res['job']} on {res['scenario']} ({res['seconds']:.2f} s of motion)")
+    t.add_column("item")
+    t.add_column("result")
+    for h, v in zip(JOB_HEADER, job_row(res)):
+        t.add_row(h, v)
+    console.print(t)
+    chip = res["chip"]
+    if "not_run" not in chip:
+        console.print(f"self-test on simavr: {chip['selftest']}")
+        if not (chip["steps_equal"] and chip["replies_equal"] and chip["selftest_pass"]):
+            raise NnikError("the simulated chip's steps or answers differ from the Python model", res["job"])
+    console.print(f"plot: {res['png']}; figures: {Path(res['png']).with_suffix('.json')}")
+
+
 def build_parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(prog="nnik", description="Inverse kinematics as verified fixed-point C for 8-bit MCUs.")
     sub = ap.add_subparsers(dest="command", required=True)
@@ -262,6 +308,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=cmd_evaluate)
     p = sub.add_parser("export", help="quantise a trained model and write its fixed-point C")
     p.add_argument("model_dir")
+    p.add_argument("--arduino", metavar="DIR", help="also write an Arduino/PlatformIO library (self-test, G-code sketch)")
     p.set_defaults(func=cmd_export)
     p = sub.add_parser("verify", help="run the generated C and compare it bit for bit with the integer model")
     p.add_argument("model_dir")
@@ -287,6 +334,13 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--noise-um", type=float, default=2.0, help="measurement noise, 1 sigma, per axis")
     p.add_argument("--seed", type=int, default=0)
     p.set_defaults(func=cmd_synth_csv)
+    p = sub.add_parser("job", help="run a G-code job through the firmware logic (Python and simulated Uno)")
+    p.add_argument("scenario", help="scenario TOML (its build directory) or a model directory")
+    p.add_argument("job", help="G-code file")
+    p.add_argument("-o", "--outdir", help="model directory (default build/<name>/)")
+    p.add_argument("--seg-um", type=int, help="longest segment in um (default 500)")
+    p.add_argument("--no-chip", action="store_true", help="Python model only, no simavr run")
+    p.set_defaults(func=cmd_job)
     return ap
 
 

@@ -4,7 +4,10 @@ the output directory exactly as it was."""
 from __future__ import annotations
 
 import hashlib
+import shutil
 from pathlib import Path
+
+import pytest
 
 from nnik.cli import main
 from tests.conftest import DATASETS
@@ -50,3 +53,21 @@ def with_training(text: str, training: str = TINY_TRAINING) -> str:
     """The scenario text with its [training] table replaced by `training`."""
     head = text.split("[training]")[0]
     return head + training
+
+
+@pytest.fixture(scope="session")
+def tiny_run(tmp_path_factory) -> Path:
+    """A galvo run with a tiny training budget: generate, train, evaluate and export through the CLI.
+    Tests copy it (`copy_run`) before spoiling anything."""
+    d = tmp_path_factory.mktemp("tiny_run")
+    toml = d / "tiny.toml"
+    toml.write_text(with_training(GALVO.replace("n_test = 20000", "n_test = 300")))
+    out = d / "out"
+    for argv in (["generate", toml, "-o", out], ["train", toml, "-o", out], ["evaluate", out], ["export", out]):
+        assert main([str(a) for a in argv]) == 0, argv
+    return out
+
+
+def copy_run(run: Path, dest: Path) -> Path:
+    shutil.copytree(run, dest)
+    return dest
