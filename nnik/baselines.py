@@ -52,6 +52,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from nnik.domain import clamp_um, domain_um
+from nnik.c_text import c_comment_safe
 from nnik.errors import NnikError
 from nnik.emit.templating import CODEGEN, RUNTIME, environment
 from nnik.scenario import Scenario
@@ -207,10 +208,11 @@ def render_float_c(scn: Scenario, name: str | None = None) -> dict[str, str] | N
         prefix=f"{name}_float",
         guard=f"NNIK_{name.upper()}_FLOAT_H",
         scn=scn,
+        scenario_text=c_comment_safe(scn.name),
         kind=m.kind,
         family=m.family,
-        mech=m.describe(),
-        actuator=scn.actuator.describe(),
+        mech=c_comment_safe(m.describe()),
+        actuator=c_comment_safe(scn.actuator.describe()),
         unit=scn.unit,
         outputs=scn.outputs,
         c=consts,
@@ -576,6 +578,7 @@ def render_lut_c(lut: Lut, name: str | None = None) -> dict[str, str]:
         prefix=f"{name}_lut",
         guard=f"NNIK_{name.upper()}_LUT_H",
         lut=lut,
+        scenario_text=c_comment_safe(lut.scenario),
         ctype=ctype,
         rd="NNIK_RD_I16" if lut.entry_bits == 16 else "NNIK_RD_I32",
         rows=rows,
