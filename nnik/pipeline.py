@@ -367,23 +367,26 @@ def problem_for(outdir: Path):
     return problem
 
 
-def select(outdir: Path, progress: bool = True, families=None) -> dict:
+def select(outdir: Path, progress: bool = True, families=None, target: dict | None = None) -> dict:
     """Fit every family's ladder, verify each family's best (host, avr, pic18), export the pick as
-    c/NAME.{c,h} and every family's best as c/alt/<family>/; metrics["implementations"]."""
+    c/NAME.{c,h} and every family's best as c/alt/<family>/; metrics["selection"]. ``target``
+    overrides the scenario's [target] table (keys as there)."""
     from tqdm import tqdm
 
     from nnik import selection as sel
 
     problem = problem_for(outdir)
-    target = problem.scn.target
+    target = {**problem.scn.target, **(target or {})}
     cands = sel.fit_ladder(problem, families, progress=(lambda **k: tqdm(leave=False, **k)) if progress else None)
     bests = sel.family_bests(cands, target)
-    c_dir = outdir / C_DIR
-    items = list(bests.values())
-    for c in tqdm(items, desc="verify family bests", unit="family", disable=not progress, leave=False):
-        sel.verify_candidate(c, c_dir / sel.ALT_DIR / c.family, (outdir / "targets" / "families").resolve())
-    pick = sel.choose(bests, target)
-    sel.write_choice(c_dir, bests, pick)
+    reachable = any(c.meets(target["max_error"]) for c in cands)
+    if reachable:
+        c_dir = outdir / C_DIR
+        for c in tqdm(list(bests.values()), desc="verify family bests", unit="family", disable=not progress, leave=False):
+            sel.verify_candidate(c, c_dir / sel.ALT_DIR / c.family, (outdir / "targets" / "families").resolve())
+    pick = sel.choose(bests, target) if reachable else None
+    if reachable:
+        sel.write_choice(outdir / C_DIR, bests, pick)
     section = {
         "target": target, "input_unit_um": problem.unit_um, "check_points": int(len(problem.check[0])),
         "check_set": "dense grid" if problem.analytic else "held-out rows",

@@ -4,8 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from nnik.c_text import c_comment_safe
 from nnik.errors import NnikError
-from nnik.templating import environment
+from nnik.emit.templating import environment
 
 
 def i32(v: int) -> str:
@@ -19,10 +20,8 @@ def i32(v: int) -> str:
 
 
 def comment_safe(text: str) -> str:
-    """User text for a C comment: no comment terminators, no line breaks, ASCII only."""
-    s = str(text).replace("*/", "* /").replace("/*", "/ *").replace("\\", "/")
-    s = " ".join(s.split())
-    return s.encode("ascii", "replace").decode("ascii")
+    """User text for a C comment (see :func:`nnik.c_text.c_comment_safe`)."""
+    return c_comment_safe(text)
 
 
 def c_list(values, per_line: int = 12, indent: str = "    ") -> str:
