@@ -1,0 +1,27 @@
+"""One table row per job for the CLI and the report (contour error, segment rate, chip check)."""
+
+from __future__ import annotations
+
+JOB_HEADER = ("scenario", "job", "segments", "steps", "contour max / RMS (µm)", "IK max (µm)", "rounding max (µm)",
+              "chord max (µm)", "chip steps", "cycles/segment", "segments/s at 50 % CPU", "flash / RAM (B)")
+
+
+def _um(s: dict | None, rms: bool = False) -> str:
+    if not s:
+        return "-"
+    return f"{s['max']:.1f} / {s['rms']:.1f}" if rms else f"{s['max']:.2f}" if s["max"] < 10 else f"{s['max']:.1f}"
+
+
+def job_row(r: dict) -> tuple[str, ...]:
+    c = r["chip"]
+    if "not_run" in c:
+        chip = (f"not run ({c['not_run']})", "-", "-", "-")
+    else:
+        same = "equal" if c["steps_equal"] and c["replies_equal"] else "DIFFER"
+        cps = c["cycles_per_segment"]
+        rate = c.get("segment_rate_hz")
+        chip = (f"{c['steps']} {same}", f"{cps['mean']:.0f} (max {cps['max']})" if cps else "-",
+                f"{rate['mean']:.0f} (worst {rate['worst']:.0f})" if rate else "-",
+                f"{c['flash_bytes']} / {c['ram_bytes']}")
+    return (r["scenario"], r["job"], str(r["segments"]), str(r["steps"]), _um(r["contour_um"], True), _um(r["ik_um"]),
+            _um(r.get("rounding_um")), _um(r.get("chord_um")), *chip)
