@@ -2,6 +2,8 @@
 # Install the simulator toolchains nnik verifies generated C on.
 #
 #   AVR   : gcc-avr, avr-libc, simavr                (Debian packages)
+#   Uno   : arduino-core-avr, arduino-mk, libsimavr-dev (Debian packages: the Arduino AVR core
+#           the G-code sketches build on, and the simavr library the job harness links)
 #   PIC18 : gputils, gpsim                           (Debian packages)
 #           SDCC 4.2.0 with the pic16 port only      (built here from Debian's own
 #                                                     source package sdcc 4.2.0+dfsg-1,
@@ -27,7 +29,7 @@ JOBS="${NNIK_BUILD_JOBS:-$(nproc 2>/dev/null || echo 2)}"
 REPO_ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 SFR_SRC="$REPO_ROOT/codegen/harness/pic18/pic18f452_sfr.c"
 
-APT_PKGS=(gcc-avr avr-libc simavr gputils gpsim)
+APT_PKGS=(gcc-avr avr-libc simavr gputils gpsim arduino-core-avr arduino-mk libsimavr-dev)
 SDCC_BUILD_DEPS=(bison flex libboost-dev texinfo zlib1g-dev g++ make xz-utils ca-certificates)
 
 T_START=$(date +%s)
