@@ -1,0 +1,138 @@
+"""Section: what to flash. Every implementation family's best point for the scenario's
+[target], measured on both simulated chips, the pick, and where the MLP wins or loses.
+
+A row's measurements are shown only while the C they ran is still what OUTDIR/c/alt/<family>/
+holds (its hash is recomputed from the file); otherwise the row says the C changed since.
+"""
+
+from __future__ import annotations
+
+import hashlib
+
+from nnik.report.document import D_CYC, D_UNIT, Fig, Section, Table, keypath, lookup, not_run_cell, num, txt
+
+PNG_FRONT = "implementations_front.png"
+PNGS = (PNG_FRONT,)
+CHIPS = ("avr", "pic18")
+
+
+def _c_hash(ctx, family: str) -> str | None:
+    name = ctx.m.get("name", "")
+    f = ctx.inp.model_dir / "c" / "alt" / family / f"{name}.c"
+    if not f.is_file():
+        return None
+    return hashlib.sha256(f.read_bytes()).hexdigest()[:16]
+
+
+def _check_cell(r: dict, where: str) -> str:
+    c = r.get("host") if where == "host" else lookup(r, "targets", where)
+    if not isinstance(c, dict):
+        return "—"
+    if "not_run" in c:
+        return "not run"
+    return "yes" if c.get("bit_exact") else f"NO ({c.get('mismatches')} mismatches)"
+
+
+def pick_sentence(sel: dict, unit: str) -> str:
+    rows = sel["implementations"]
+    tg = sel["target"]
+    chip = tg["chip"]
+    pick = next((r for r in rows if r.get("picked")), None)
+    if pick is None:
+        return f"No family met max_error {tg['max_error']:g} {unit} within the limits on {chip}."
+    cyc = pick["cycles"][chip]
+    s = (f"nnik picks {pick['describe']}: {pick['pre_max']:.4f} {unit} before rounding, {cyc:.0f} cycles and "
+         f"{pick['flash_bytes'][chip]} B of flash on {chip}.")
+    others = [r for r in rows if not r.get("picked") and r["pre_max"] <= tg["max_error"]
+              and lookup(r, "cycles", chip) is not None]
+    if others:
+        nxt = min(others, key=lambda r: r["cycles"][chip])
+        s += (f" The best point of another family that meets the target, {nxt['describe']}, takes "
+              f"{nxt['cycles'][chip]:.0f} cycles: the pick is {nxt['cycles'][chip] / cyc:.2f}x faster.")
+    missing = [r for r in rows if r["pre_max"] > tg["max_error"]]
+    if missing:
+        s += " Missing the target: " + "; ".join(f"{r['family']} (best {r['pre_max']:.4f} {unit})" for r in missing) + "."
+    return s
+
+
+def mlp_sentence(sel: dict, unit: str) -> str | None:
+    rows = sel["implementations"]
+    chip = sel["target"]["chip"]
+    mlp = next((r for r in rows if r["family"] == "mlp"), None)
+    if mlp is None or lookup(mlp, "cycles", chip) is None:
+        return None
+    if mlp.get("picked"):
+        return f"The MLP earns its place here: it is the cheapest family that meets the target on {chip}."
+    better = [r for r in rows if r is not mlp and lookup(r, "cycles", chip) is not None
+              and r["pre_max"] <= mlp["pre_max"] and r["cycles"][chip] <= mlp["cycles"][chip]]
+    if better:
+        b = min(better, key=lambda r: r["cycles"][chip])
+        return (f"The MLP loses here: {b['describe']} is at least as accurate ({b['pre_max']:.4f} vs "
+                f"{mlp['pre_max']:.4f} {unit}) and {mlp['cycles'][chip] / b['cycles'][chip]:.2f}x faster on {chip}.")
+    return (f"The MLP ({mlp['pre_max']:.4f} {unit}, {mlp['cycles'][chip]:.0f} cycles on {chip}) is not dominated: no "
+            "other family is both at least as accurate and at least as fast.")
+
+
+def build(ctx) -> Section:
+    sec = Section("implementations", "What to flash: every implementation family")
+    sel = ctx.m.get("selection")
+    if not isinstance(sel, dict) or not sel.get("implementations"):
+        sec.not_run.append("no family selection in metrics.json (run `nnik run`)")
+        return sec
+    unit = ctx.unit
+    tg = sel["target"]
+    sec.paragraphs.append(pick_sentence(sel, unit))
+    ms = mlp_sentence(sel, unit)
+    if ms:
+        sec.paragraphs.append(ms)
+    sec.paragraphs.append(
+        f"Target: max_error {tg['max_error']:g} {unit} before rounding on {sel['check_points']} {sel['check_set']} "
+        f"points; the cheapest by measured cycles on {tg['chip']} wins, flash breaks ties. Inputs in units of "
+        f"{sel['input_unit_um']:g} µm. Each family's best is in c/alt/<family>/, the pick in c/.")
+    t = Table("implementations-table", "Each family's best point (pre-rounding error; cycles: mean per call on the "
+              "simulator; flash: the model's own bytes)",
+              ["family", "configuration", f"pre max ({unit})", f"RMS ({unit})", "avr cycles", "pic18 cycles",
+               "avr flash B", "pic18 flash B", "bit-exact host / avr / pic18", "pick"])
+    for i, r in enumerate(sel["implementations"]):
+        base = ("selection", "implementations", i)
+        row = [txt(r["family"], "label"), txt(r.get("describe"))]
+        row.append(num(r.get("pre_max"), D_UNIT, keypath(*base, "pre_max")))
+        row.append(num(max(r.get("rms") or [float("nan")]), D_UNIT))
+        current = _c_hash(ctx, r["family"])
+        if current != r.get("model_hash"):
+            row.append(not_run_cell("the C in c/alt/" + r["family"] + "/ changed since it was measured", 5))
+        else:
+            for chip in CHIPS:
+                row.append(num(lookup(r, "cycles", chip), D_CYC, keypath(*base, "cycles", chip)))
+            for chip in CHIPS:
+                row.append(num(lookup(r, "flash_bytes", chip), D_CYC, keypath(*base, "flash_bytes", chip)))
+            row.append(txt(" / ".join(_check_cell(r, w) for w in ("host", *CHIPS))))
+        row.append(txt("PICK" if r.get("picked") else ""))
+        t.rows.append(row)
+    sec.tables.append(t)
+    ctx.plot(sec, lambda: plot_front(ctx, sel))
+    return sec
+
+
+def plot_front(ctx, sel: dict) -> Fig:
+    from nnik.report.implementations_plot import families_front
+
+    pts = []
+    best_hash = {r["family"]: r.get("model_hash") for r in sel["implementations"]}
+    for r in sel["implementations"]:
+        pts.append({"family": r["family"], "err": r["pre_max"], "picked": r.get("picked"), "best": True,
+                    "measured": {c: (r["cycles"][c], r["flash_bytes"][c]) for c in CHIPS
+                                 if lookup(r, "cycles", c) is not None}})
+    for r in sel.get("ladder", []):
+        if "pre_max" not in r or r.get("model_hash") == best_hash.get(r["family"]):
+            continue
+        pts.append({"family": r["family"], "err": r["pre_max"],
+                    "estimated": {c: (r["estimate"][c]["cycles"], r["estimate"][c]["flash_bytes"]) for c in CHIPS
+                                  if c in r.get("estimate", {})}})
+    float_ik = {c: lookup(ctx.m, "targets", c, "baselines", "float", "cycles") for c in CHIPS}
+    families_front(ctx.out / PNG_FRONT, points=pts, chips=CHIPS, max_error=sel["target"]["max_error"], unit=ctx.unit,
+                   float_ik={k: v for k, v in float_ik.items() if v}, title=f"{ctx.m.get('name')}: error against cost, "
+                   "every family (filled: measured best; hollow: ladder, estimated)")
+    return Fig(PNG_FRONT, "error against cycles and flash per family",
+               "Pre-rounding max error (log) against cycles (top) and flash (bottom) on each chip. The pick is "
+               "circled; the MLP's best is labelled; the dotted line is max_error.")
