@@ -77,15 +77,17 @@ def _align(k: int) -> list[str]:
     return code
 
 
-def input_stage(impl, flipmask) -> list[str]:
+def input_stage(impl, flipmask, after_clamp=None) -> list[str]:
     """Both inputs: clamp (T flag), fold, align; leaves ix in r6, fx in r2(:r3), iy in r20,
-    fy in r4(:r5)."""
+    fy in r4(:r5). after_clamp(a) -> lines run with t = x - lo in r20:r19:r18."""
     p = impl.problem
     g = impl.table.grid
     code = ["clr " + ZERO, "clr " + NEG, "clt"]
     for a in range(2):
         lo, hi = int(p.lo[a]), int(p.hi[a])
         code.append(f"nnik_inw {', '.join(A)}, {lo}, {hi - lo}, {U[0]}")
+        if after_clamp is not None:
+            code += after_clamp(a)
         if g.fold[a]:
             code += add_const(A[:3], lo)  # t = w + lo = x (signed 24-bit)
             code += ["brpl 1f"] + negate(A[:3])
@@ -196,12 +198,12 @@ def wrap(lines: list[str], tabsym: str) -> str:
         "    return flag;"])
 
 
-def body(impl, ctx, base_hook=None) -> str:
+def body(impl, ctx, base_hook=None, after_clamp=None) -> str:
     """The whole function body. base_hook(o) -> asm lines turning A (table acc of output o)
     into the total before rounding (the hybrid's base); Z/X must be preserved by it."""
     tab = impl.table
     g = tab.grid
-    code = input_stage(impl, ctx["flipmask"])
+    code = input_stage(impl, ctx["flipmask"], after_clamp)
     code += pointer(tab) + weights(g.W)
     nn = g.n[0] * g.n[1]
     B = tab.bits // 8

@@ -108,7 +108,7 @@ def _align(asm: Asm, v: int, k: int) -> None:
         asm += [f"bcf {STATUS}, 0, A", f"rrcf {b[2]}, F, B", f"rrcf {b[1]}, F, B", f"rrcf {b[0]}, F, B"]
 
 
-def table_part(impl, asm: Asm, flipmask) -> list[str]:
+def table_part(impl, asm: Asm, flipmask, after_clamp=None) -> list[str]:
     """Input stage, weights, pointer and both outputs' table accumulators; returns the list of
     macro invocations (C tokens) the clamp needs, in order, as ('macro', text) / ('asm', line)."""
     p = impl.problem
@@ -128,6 +128,8 @@ def table_part(impl, asm: Asm, flipmask) -> list[str]:
         items.append(("macro", f'NNIK_P18_INW("{asm.at("v", 4 * a)}", "{asm.at("fl")}", {lo}, {hi - lo}, '
                                f'"{asm.sym}_in{a}")'))
         v = [asm.at("v", 4 * a + i) for i in range(3)]
+        if after_clamp is not None:
+            after_clamp(asm, a)
         if g.fold[a]:
             m = lo & 0xFFFFFF  # t = w + lo = x (signed 24-bit), then |x|
             for i in range(3):
@@ -280,12 +282,12 @@ def render(impl, items: list, w: str, extra_fields: str = "") -> str:
     return "\n".join(lines)
 
 
-def body(impl, ctx, base_hook=None) -> str:
+def body(impl, ctx, base_hook=None, after_clamp=None) -> str:
     """The PIC18 function (work struct + function). base_hook(asm, o) appends assembly that
     turns the table accumulator A of output o into the total before rounding."""
     w = f"{impl.problem.name}_p18"
     asm = Asm(f"_{w}")
-    items = table_part(impl, asm, ctx["flipmask"])
+    items = table_part(impl, asm, ctx["flipmask"], after_clamp)
     for o in range(2):
         output_acc(impl, asm, o)
         if base_hook is not None:

@@ -1,0 +1,186 @@
+"""The ``hybrid`` family: an exact affine base (least squares) evaluated in int32, plus the
+residual in a ``lut`` table (:mod:`nnik.implementations.lut_table`). The residual is small, so
+the table's int16 entries carry many more fractional bits than a full table's.
+
+Integer contract (per output o; tx = x - lo_x, ty = y - lo_y after the clamp, unsigned):
+    base = C + Ax tx + Ay ty               int32, Q``G`` (Ax, Ay int16; |base| < 2^31)
+    acc  = the residual table's accumulator, Q``s_t``
+    total = base + (acc >> (s_t - G))      (or acc 2^(G - s_t) when s_t < G)
+    out = offset + ((total + 2^(G-1)) >> G), then the DAC clamp; pre = offset + total / 2^G.
+The table is fitted to the exact residual q - offset - base / 2^G of the quantised base.
+
+Knobs: ``k``, ``bits``, ``W``, ``fit`` as in ``lut`` (the table never folds: the base has no
+symmetry), ``base`` = "affine".
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from nnik.errors import NnikError
+from nnik.implementations.c_common import i32
+from nnik.implementations.lut import LutImpl, fit_points, k_for_nodes
+from nnik.implementations.lut_table import Grid, Table, fit_nodes, quantise
+from nnik.implementations.problem import Problem
+
+DEFAULTS = {"bits": 16, "W": 16, "fit": "lsq", "base": "affine"}
+A_MAX = 32767
+
+
+def affine_lsq(t: np.ndarray, q: np.ndarray) -> np.ndarray:
+    """(2, 3) float coefficients [c, ax, ay] per output of the least-squares affine map."""
+    m = np.column_stack([np.ones(len(t)), t[:, 0], t[:, 1]])
+    coef, *_ = np.linalg.lstsq(m, q, rcond=None)
+    return coef.T
+
+
+class HybridImpl(LutImpl):
+    family = "hybrid"
+    doc = "exact affine base in int32 plus a residual bilinear table"
+
+    def __init__(self, problem: Problem, config: dict, table: Table | None = None, base=None, G=None,
+                 offset=None):
+        super().__init__(problem, config, table)
+        self.base = base  # (2, 3) int64: C, Ax, Ay
+        self.G = G  # (2,) base fractional bits
+        self.offset = offset  # (2,) int
+
+    @classmethod
+    def ladder(cls, problem: Problem) -> list[dict]:
+        span = [int(problem.hi[a] - problem.lo[a]) for a in range(2)]
+        out = []
+        for nodes in (5, 8, 12, 17, 24, 33):
+            out.append({"k": [k_for_nodes(span[a], nodes) for a in range(2)], "bits": 16, "W": 16, "fit": "lsq",
+                        "base": "affine"})
+        return out
+
+    @classmethod
+    def fit(cls, problem: Problem, config: dict) -> "HybridImpl":
+        cfg = {**DEFAULTS, **config, "symmetry": False}
+        if "k" not in cfg:
+            raise NnikError("hybrid config needs k = [kx, ky] (cell size exponents)")
+        if cfg["base"] != "affine":
+            raise NnikError(f"unknown hybrid base {cfg['base']!r} (affine)")
+        cfg["k"] = [int(v) for v in cfg["k"]]
+        lo, hi = problem.lo, problem.hi
+        span = (hi - lo).astype(np.float64)
+        grid = Grid.make(lo, hi, cfg["k"], (False, False), int(cfg["W"]))
+        pts, q = fit_points(problem, grid)
+        pts = np.asarray(pts, dtype=np.float64)
+        t = pts - lo
+        coef = affine_lsq(t, q)
+        offset = np.rint((q.max(0) + q.min(0)) / 2).astype(np.int64)
+        base, G = [], []
+        for o in range(2):
+            c, ax, ay = coef[o]
+            c = c - offset[o]
+            amp = float(np.abs(q[:, o] - offset[o]).max()) * 1.5 + 1.0
+            g = None
+            for gg in range(24, -1, -1):
+                A = np.rint(np.array([ax, ay]) * 2.0**gg)
+                C = np.rint(c * 2.0**gg)
+                if np.abs(A).max() > A_MAX:
+                    continue
+                if abs(C) + np.abs(A) @ span + amp * 2.0**gg + 2.0**gg < 2.0**30:
+                    g = gg
+                    break
+            if g is None:
+                raise NnikError(f"affine base of output {o} does not fit int32 with int16 coefficients")
+            base.append([int(C), int(A[0]), int(A[1])])
+            G.append(g)
+        base = np.array(base, dtype=np.int64)
+        G = np.array(G)
+        bval = (base[:, 0][None, :] + t[:, :1] * base[:, 1][None, :] + t[:, 1:] * base[:, 2][None, :]) / 2.0**G
+        resid = q - offset - bval
+        vals, _ = fit_nodes(grid, t, resid, np.zeros((2, 2), bool), cfg["fit"], measured=not problem.analytic)
+        tab = quantise(grid, vals, int(cfg["bits"]), np.zeros((2, 2), bool), cfg.get("fb"))
+        for o in range(2):  # the table's offset moves into the base constant
+            base[o, 0] += int(tab.offset[o]) << int(G[o])
+        tab.offset = (0, 0)
+        im = cls(problem, cfg, tab, base, G, offset)
+        im._check_range()
+        return im
+
+    # ---- integer model -----------------------------------------------------------------------------
+    @property
+    def align(self) -> list[int]:
+        return [int(self.table.shift[o] - self.G[o]) for o in range(2)]
+
+    def _check_range(self) -> None:
+        """|base| is largest at a corner of the domain (it is affine); the table adds at most
+        max|e| 2^-fb; the sum and the rounding half must stay below 2^31."""
+        p = self.problem
+        span = p.hi - p.lo
+        corners = np.array([[0, 0], [span[0], 0], [0, span[1]], [span[0], span[1]]], dtype=np.float64)
+        for o in range(2):
+            b = np.abs(self.base[o, 0] + corners @ self.base[o, 1:].astype(np.float64)).max()
+            tab = (np.abs(self.table.ent[o]).max() + 1) * 2.0 ** (int(self.G[o]) - self.table.fb[o]) + 1
+            if b + tab + 2.0 ** self.G[o] >= 2**31:
+                raise NnikError(f"hybrid output {o} overflows int32 (base {b:.4g} + table {tab:.4g})")
+
+    def total(self, in_units: np.ndarray) -> np.ndarray:
+        c, _ = self.problem.clamp(in_units)
+        acc = self.table.acc(c)
+        t = c - self.problem.lo
+        out = np.empty(acc.shape, dtype=np.int64)
+        for o in range(2):
+            b = self.base[o, 0] + self.base[o, 1] * t[:, 0] + self.base[o, 2] * t[:, 1]
+            al = self.align[o]
+            out[:, o] = b + ((acc[:, o] >> al) if al >= 0 else acc[:, o] * (1 << -al))
+        return out
+
+    def run(self, in_units: np.ndarray):
+        from nnik.implementations.base import IntRun
+
+        p = self.problem
+        _, flags = p.clamp(in_units)
+        tot = self.total(in_units)
+        pre = np.empty(tot.shape)
+        out = np.empty(tot.shape, dtype=np.int64)
+        for o in range(2):
+            pre[:, o] = self.offset[o] + tot[:, o] / 2.0 ** self.G[o]
+            out[:, o] = p.finish(tot[:, o], int(self.G[o]), int(self.offset[o]))
+        return IntRun(pre=pre, out=out, flags=flags)
+
+    # ---- C ---------------------------------------------------------------------------------------------
+    def final_stage(self) -> dict:
+        G = [int(g) for g in self.G]
+        base_c = [f"(uint32_t){i32(self.base[o, 0])} + (uint32_t)({i32(self.base[o, 1])} * (int32_t)tx)"
+                  f" + (uint32_t)({i32(self.base[o, 2])} * (int32_t)ty)" for o in range(2)]
+        return {"final_shift": G, "final_off": [i32(v) for v in self.offset],
+                "final_off_int": [int(v) for v in self.offset],
+                "half": [i32(1 << (g - 1)) if g > 0 else None for g in G], "base": True, "base_c": base_c,
+                "align": self.align, "G": G}
+
+    def render_source(self) -> str:
+        from nnik.emit.templating import environment
+        from nnik.implementations import hybrid_asm, lut_avr, lut_p18
+        from nnik.implementations.lut import table_ctx
+        from nnik.implementations.c_common import comment_safe
+
+        p = self.problem
+        ctx = dict(name=p.name, NAME=p.name.upper(), scenario=comment_safe(p.scn.name), family=self.family,
+                   title=comment_safe(self.describe()), outputs=p.outputs,
+                   lo=[i32(v) for v in p.lo], hi=[i32(v) for v in p.hi], code_range=p.code_range,
+                   code_lo=i32(p.code_range[0]) if p.code_range else None,
+                   code_hi=i32(p.code_range[1]) if p.code_range else None, **table_ctx(p, self.table),
+                   **self.final_stage())
+        ctx["avr_body"] = hybrid_asm.avr_body(self, ctx)
+        ctx["p18_body"] = hybrid_asm.p18_body(self, ctx)
+        return environment().get_template("lut2_ik.c.j2").render(**ctx)
+
+    def model_bytes(self) -> int:
+        return self.table.nbytes + 2 * 3 * 4
+
+    def estimate(self, target: str) -> dict:
+        from nnik.implementations.lut_cost import estimate
+
+        return estimate(self, target)
+
+    def describe(self) -> str:
+        g = self.table.grid
+        return (f"hybrid affine + residual lut {g.n[0]}x{g.n[1]} int{self.table.bits} (cells 2^{g.k[0]} x "
+                f"2^{g.k[1]}, Q{g.W} fraction, {self.config.get('fit', 'lsq')})")
+
+
+IMPLEMENTATION = HybridImpl
