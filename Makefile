@@ -29,6 +29,7 @@ test: setup toolchains
 # validation sweep (predicted vs measured cycles and flash on 11 architectures x 2 tanh)
 bench: setup toolchains
 	$(PYTHON) -m nnik.bench $(SCENARIO)
+	$(PYTHON) -m nnik.bench_families
 	$(PYTHON) -m nnik.estimate sweep
 	$(PYTHON) -m nnik.estimate sweep --kernel fast --tanh '' --arch 4 --arch 6 --arch 8 --arch 10 --arch 12 --arch 16
 
