@@ -1,6 +1,6 @@
 """The report's pictures: one function per PNG, matplotlib on the Agg backend, no pyplot state.
 
-Every function takes plain numpy arrays / dicts prepared by :mod:`nnik.report` and writes one
+Every function takes plain numpy arrays / dicts prepared by :mod:`nnik.report` sections and writes one
 PNG to ``path``. None of them reads files or knows about metrics.json.
 """
 

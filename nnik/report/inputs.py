@@ -1,0 +1,122 @@
+"""What the report reads from MODEL_DIR: metrics.json (required), the model, the data, fixed_eval.npz."""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from nnik.errors import NnikError
+
+METRICS_FILE = "metrics.json"
+MODEL_FILE = "model.pt"
+DATA_FILE = "data.npz"
+FIXED_EVAL_FILE = "fixed_eval.npz"
+FIXED_EVAL_ARRAYS = ("p_test", "q_true", "q_float", "q_fixed", "q_delivered")
+
+
+@dataclass
+class Inputs:
+    model_dir: Path
+    metrics: dict
+    model: Any = None  # nnik.train.TrainedModel
+    model_reason: str = ""
+    scenario: Any = None  # nnik.scenario.Scenario
+    scenario_reason: str = ""
+    data: Any = None  # nnik.data.Dataset
+    data_reason: str = ""
+    fixed_eval: dict | None = None
+    fixed_eval_reason: str = ""
+    files: list[tuple[str, bool, str]] = field(default_factory=list)  # (file, present, note)
+
+
+def load_metrics(model_dir: Path) -> dict:
+    path = Path(model_dir) / METRICS_FILE
+    if not path.is_file():
+        raise NnikError("metrics.json not found (run `nnik run` or `nnik evaluate` first)", str(path))
+    try:
+        metrics = json.loads(path.read_text())
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        raise NnikError(f"malformed metrics.json: {exc}", str(path)) from None
+    if not isinstance(metrics, dict):
+        raise NnikError("malformed metrics.json: not a JSON object", str(path))
+    for k in ("name", "outputs", "unit"):
+        if k not in metrics:
+            raise NnikError(f"malformed metrics.json: missing {k!r}", str(path))
+    return metrics
+
+
+def short_exc(exc: BaseException) -> str:
+    s = str(exc).strip().splitlines()
+    return f"{type(exc).__name__}: {s[0]}" if s else type(exc).__name__
+
+
+def load_inputs(model_dir: Path) -> Inputs:
+    model_dir = Path(model_dir)
+    inp = Inputs(model_dir, load_metrics(model_dir))
+    inp.files.append((METRICS_FILE, True, "required"))
+
+    mp = model_dir / MODEL_FILE
+    if mp.is_file():
+        try:
+            from nnik.train import TrainedModel
+
+            inp.model = TrainedModel.load(mp)
+            inp.scenario = inp.model.scenario
+            inp.files.append((MODEL_FILE, True, "weights, scaling, scenario, training history"))
+        except Exception as exc:  # noqa: BLE001 - a report must survive a bad model file
+            inp.model_reason = f"{MODEL_FILE} could not be loaded ({short_exc(exc)})"
+            inp.files.append((MODEL_FILE, False, inp.model_reason))
+    else:
+        inp.model_reason = f"{MODEL_FILE} not found in {model_dir}"
+        inp.files.append((MODEL_FILE, False, "not found"))
+
+    if inp.scenario is None:
+        src = inp.metrics.get("scenario")
+        if src and Path(src).is_file():
+            try:
+                from nnik.scenario import load_scenario
+
+                inp.scenario = load_scenario(src)
+            except Exception as exc:  # noqa: BLE001
+                inp.scenario_reason = f"scenario {src} could not be loaded ({short_exc(exc)})"
+        else:
+            inp.scenario_reason = f"{inp.model_reason or 'no model'}, and the scenario file {src!r} is not found"
+
+    dp = model_dir / DATA_FILE
+    if dp.is_file():
+        try:
+            from nnik.data import Dataset
+
+            inp.data = Dataset.load(dp)
+            inp.files.append((DATA_FILE, True, "test split"))
+        except Exception as exc:  # noqa: BLE001
+            inp.data_reason = f"{DATA_FILE} could not be loaded ({short_exc(exc)})"
+            inp.files.append((DATA_FILE, False, inp.data_reason))
+    else:
+        inp.data_reason = f"{DATA_FILE} not found in {model_dir}"
+        inp.files.append((DATA_FILE, False, "not found"))
+
+    fp = model_dir / FIXED_EVAL_FILE
+    if fp.is_file():
+        try:
+            with np.load(fp) as z:
+                missing = [a for a in FIXED_EVAL_ARRAYS if a not in z.files]
+                if missing:
+                    raise ValueError(f"missing arrays {', '.join(missing)}")
+                fe = {a: np.asarray(z[a], dtype=np.float64) for a in FIXED_EVAL_ARRAYS}
+            n = len(fe["p_test"])
+            if any(a.ndim != 2 or len(a) != n for a in fe.values()) or n == 0:
+                raise ValueError("arrays must be (N, 2) with the same N > 0")
+            inp.fixed_eval = fe
+            inp.files.append((FIXED_EVAL_FILE, True, f"{n} points of the fixed-point evaluation"))
+        except Exception as exc:  # noqa: BLE001
+            inp.fixed_eval_reason = f"{FIXED_EVAL_FILE} could not be read ({short_exc(exc)})"
+            inp.files.append((FIXED_EVAL_FILE, False, inp.fixed_eval_reason))
+    else:
+        inp.fixed_eval_reason = f"{FIXED_EVAL_FILE} not found in {model_dir}"
+        inp.files.append((FIXED_EVAL_FILE, False, "not found (fixed-point export not run)"))
+    return inp

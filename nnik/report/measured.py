@@ -1,0 +1,126 @@
+"""What metrics.json says about each target: its status, the implementations measured on it,
+and whether the LUT baseline wins."""
+
+from __future__ import annotations
+
+from nnik.report.document import D_CYC, D_UNIT, finite, fmt, keypath, lookup
+
+# The targets a user expects to see, even when they were not run; others in metrics.json follow.
+EXPECTED_TARGETS = ("avr", "pic18")
+
+
+def target_names(metrics: dict) -> list[str]:
+    names = list(EXPECTED_TARGETS)
+    for t in (metrics.get("targets") or {}):
+        if t not in names:
+            names.append(t)
+    return names
+
+
+def target_status(metrics: dict, t: str) -> tuple[dict | None, str]:
+    """(target dict, "") when it ran, else (None, reason)."""
+    targets = metrics.get("targets")
+    if not isinstance(targets, dict):
+        return None, "no `targets` section in metrics.json"
+    tm = targets.get(t)
+    if not isinstance(tm, dict):
+        return None, f"no `{t}` entry in the `targets` section of metrics.json"
+    if "not_run" in tm:
+        return None, str(tm["not_run"])
+    return tm, ""
+
+
+def clocks_per_cycle(t: str, tm: dict) -> int:
+    """PIC18 counts instruction cycles (4 clocks each); AVR counts clocks. Overridable."""
+    return int(tm.get("clocks_per_cycle", 4 if t.lower().startswith("pic") else 1))
+
+
+def cycles_to_us(cycles, t: str, tm: dict) -> float | None:
+    clock = tm.get("clock_hz")
+    if not (finite(cycles) and finite(clock) and clock > 0):
+        return None
+    return float(cycles) * clocks_per_cycle(t, tm) / float(clock) * 1e6
+
+
+def pct_diff(est, meas) -> float | None:
+    if not (finite(est) and finite(meas)) or meas == 0:
+        return None
+    return (float(est) - float(meas)) / float(meas) * 100.0
+
+
+def mlp_error(metrics: dict) -> tuple[list[float] | None, str | None]:
+    """Max error per output of the shipped fixed-point MLP as the chip delivers it."""
+    fx = metrics.get("fixed")
+    if not isinstance(fx, dict):
+        return None, None
+    if isinstance(fx.get("delivered_max_abs"), list):
+        return fx["delivered_max_abs"], "fixed/delivered_max_abs"
+    if isinstance(fx.get("max_abs"), list):
+        return fx["max_abs"], "fixed/max_abs"
+    return None, None
+
+
+def implementations(metrics: dict, t: str, tm: dict) -> list[dict]:
+    """Every measured implementation on a target: the nnik MLP, MLP kernels, float IK, LUT.
+
+    Each: label, kind, keypath (tuple into metrics), cycles, flash, ram, err (list or None),
+    err_key (metrics key prefix of err, or None).
+    """
+    out = []
+    err, err_key = mlp_error(metrics)
+    variant = lookup(metrics, "fixed", "tanh_variant") or lookup(metrics, "tanh", "variant")
+    out.append(dict(label="nnik MLP" + (f" ({variant} tanh)" if variant else ""), kind="mlp",
+                    keypath=("targets", t), cycles=tm.get("cycles"), flash=tm.get("flash_bytes"),
+                    ram=tm.get("ram_bytes"), err=err, err_key=err_key))
+    for name, k in (tm.get("kernels") or {}).items():
+        if isinstance(k, dict):
+            out.append(dict(label=f"MLP kernel {name}", kind="kernel", keypath=("targets", t, "kernels", name),
+                            cycles=k.get("cycles"), flash=k.get("flash_bytes"), ram=k.get("ram_bytes"),
+                            err=k.get("max_abs"), err_key=keypath("targets", t, "kernels", name, "max_abs")))
+    for bname, label, kind in (("float", "float IK with math.h", "float"), ("lut", "LUT baseline", "lut")):
+        b = lookup(tm, "baselines", bname)
+        if isinstance(b, dict):
+            out.append(dict(label=label, kind=kind, keypath=("targets", t, "baselines", bname),
+                            cycles=b.get("cycles"), flash=b.get("flash_bytes"), ram=b.get("ram_bytes"),
+                            err=b.get("max_abs"), err_key=keypath("targets", t, "baselines", bname, "max_abs")))
+    return out
+
+
+def worst(err) -> float | None:
+    if not isinstance(err, (list, tuple)) or not err or not all(finite(e) for e in err):
+        return None
+    return float(max(err))
+
+
+def lut_verdicts(metrics: dict) -> tuple[list[str], list[str]]:
+    """(sentences where the LUT wins, sentences where it was compared and does not)."""
+    unit = metrics.get("unit", "")
+    wins, losses = [], []
+    for t in target_names(metrics):
+        tm, _ = target_status(metrics, t)
+        if tm is None:
+            continue
+        impls = implementations(metrics, t, tm)
+        lut = next((i for i in impls if i["kind"] == "lut"), None)
+        if lut is None or not finite(lut["cycles"]) or worst(lut["err"]) is None:
+            continue
+        le = worst(lut["err"])
+        beaten = []
+        for i in impls:
+            if i["kind"] not in ("mlp", "kernel") or not finite(i["cycles"]) or worst(i["err"]) is None:
+                continue
+            if float(lut["cycles"]) < float(i["cycles"]) and le < worst(i["err"]):
+                beaten.append(i)
+        if beaten:
+            for i in beaten:
+                wins.append(
+                    f"On {t} the LUT baseline wins over the {i['label']}: fewer cycles "
+                    f"({fmt(lut['cycles'], D_CYC)} vs {fmt(i['cycles'], D_CYC)}) and lower max error "
+                    f"({fmt(le, D_UNIT)} vs {fmt(worst(i['err']), D_UNIT)} {unit}), at "
+                    f"{fmt(lut['flash'], D_CYC)} vs {fmt(i['flash'], D_CYC)} bytes of flash. "
+                    "On this machine, consider flashing the table instead."
+                )
+        else:
+            losses.append(f"On {t} the LUT baseline ({fmt(lut['cycles'], D_CYC)} cycles, max error "
+                          f"{fmt(le, D_UNIT)} {unit}) is not both faster and more accurate than any MLP variant.")
+    return wins, losses

@@ -1,0 +1,90 @@
+"""The summary: a compact table for the terminal (summary_rows) and the report's first section."""
+
+from __future__ import annotations
+
+from nnik.report.document import D_CYC, D_LSB, D_UM, D_UNIT, D_US, Section, Table, finite, fmt, lookup, txt
+from nnik.report.measured import cycles_to_us, lut_verdicts, target_names, target_status
+
+SUMMARY_HEADER = ("item", "result", "detail")
+
+
+def _vec(v, digits=D_UNIT) -> str:
+    if not isinstance(v, (list, tuple)):
+        return "—"
+    return " / ".join(fmt(x, digits) for x in v)
+
+
+def summary_rows(metrics: dict) -> list[tuple[str, ...]]:
+    """A compact table for the terminal: (item, result, detail) per row, every part shown.
+
+    Columns are SUMMARY_HEADER. Missing sections appear as ("...", "not run", reason).
+    """
+    unit = metrics.get("unit", "")
+    rows: list[tuple[str, ...]] = []
+    net = metrics.get("network") or {}
+    shape = "-".join(map(str, net.get("shape", []))) or "?"
+    rows.append(("scenario", str(metrics.get("name", "?")),
+                 f"{metrics.get('mechanism', '?')}; {shape} {net.get('mode', '')} MLP, "
+                 f"{net.get('parameters', '?')} parameters"))
+    n_test = lookup(metrics, "dataset", "n_test")
+    truth = lookup(metrics, "dataset", "truth", default="truth")
+    aff = metrics.get("affine_only")
+    if isinstance(aff, dict):
+        rows.append(("affine baseline", f"max {_vec(aff.get('max_abs'))} {unit}", f"RMS {_vec(aff.get('rms'))}"))
+    fl = metrics.get("float")
+    if isinstance(fl, dict):
+        pos = fl.get("position_um")
+        extra = f"; position max {fmt(pos.get('max'), D_UM)} µm" if isinstance(pos, dict) else ""
+        rows.append(("float64 MLP", f"max {_vec(fl.get('max_abs'))} {unit}",
+                     f"RMS {_vec(fl.get('rms'))}; vs {truth}, {n_test} points{extra}"))
+    else:
+        rows.append(("float64 MLP", "not run", "no `float` section in metrics.json"))
+    fx = metrics.get("fixed")
+    if isinstance(fx, dict):
+        rows.append(("fixed point (host model)", f"max {_vec(fx.get('max_abs'))} {unit}",
+                     f"delivered max {_vec(fx.get('delivered_max_abs'))}; "
+                     f"tanh {fx.get('tanh_variant', '?')}; {fx.get('weights_bytes', '?')} weight bytes"))
+    else:
+        rows.append(("fixed point (host model)", "not run", "no `fixed` section in metrics.json"))
+    host = metrics.get("host")
+    if isinstance(host, dict):
+        ok = bool(host.get("bit_exact"))
+        rows.append(("C on host", "bit-exact" if ok else "NOT bit-exact",
+                     f"{host.get('mismatches', '?')} mismatches over {host.get('points', '?')} points"))
+    else:
+        rows.append(("C on host", "not run", "no `host` section in metrics.json"))
+    th = metrics.get("tanh")
+    if isinstance(th, dict):
+        rows.append(("integer tanh", str(th.get("variant", "?")),
+                     f"max {fmt(th.get('max_lsb'), D_LSB)} LSB, RMS {fmt(th.get('rms_lsb'), D_LSB)} LSB of Q15"))
+    else:
+        rows.append(("integer tanh", "not run", "no `tanh` section in metrics.json"))
+    for t in target_names(metrics):
+        tm, reason = target_status(metrics, t)
+        if tm is None:
+            rows.append((t, "not run", reason))
+            continue
+        us = cycles_to_us(tm.get("cycles"), t, tm)
+        clock = tm.get("clock_hz")
+        mhz = f" @ {float(clock) / 1e6:g} MHz" if finite(clock) else ""
+        exact = "bit-exact" if tm.get("bit_exact") else f"NOT bit-exact ({tm.get('mismatches', '?')} mismatches)"
+        rows.append((t, f"{fmt(tm.get('cycles'), D_CYC)} cycles = {fmt(us, D_US)} µs{mhz}",
+                     f"flash {fmt(tm.get('flash_bytes'), D_CYC)} B, RAM {fmt(tm.get('ram_bytes'), D_CYC)} B, {exact}"))
+    wins, _ = lut_verdicts(metrics)
+    if wins:
+        rows.append(("LUT baseline", "wins", wins[0] + (f" (and {len(wins) - 1} more)" if len(wins) > 1 else "")))
+    onnx = metrics.get("onnx")
+    if isinstance(onnx, dict):
+        rows.append(("ONNX vs torch", "ok" if onnx.get("ok") else "FAILED",
+                     f"max |diff| {fmt(onnx.get('max_abs_diff'), 'sci')} (tolerance {onnx.get('tolerance', '?')})"))
+    return rows
+
+
+def build(ctx) -> Section:
+    sec = Section("summary", "Summary")
+    t = Table("summary-table", "At a glance", list(SUMMARY_HEADER))
+    for r in summary_rows(ctx.m):
+        cls = "notrun" if r[1] == "not run" else ("bad" if r[1].startswith("NOT") or r[1] in ("FAILED", "wins") else "")
+        t.rows.append([txt(r[0], "label"), txt(r[1], cls), txt(r[2])])
+    sec.tables.append(t)
+    return sec
