@@ -13,7 +13,7 @@ from rich.table import Table
 
 from nnik import pipeline
 from nnik.errors import NnikError
-from nnik.outdir import check_model_dir, check_outdir
+from nnik.outdir import check_model_dir, check_outdir, release_locks
 
 console = Console(highlight=False, width=None if sys.stdout.isatty() else 140)
 
@@ -358,6 +358,8 @@ def main(argv: list[str] | None = None) -> int:
         except KeyboardInterrupt:
             print("nnik: interrupted", file=sys.stderr)
             return 130
+        finally:
+            release_locks()
     for w in {(str(w.message), w.filename, w.lineno): w for w in caught}.values():
         print(f"nnik: warning: {w.category.__name__}: {w.message} ({Path(w.filename).name}:{w.lineno})", file=sys.stderr)
     return 0

@@ -97,7 +97,7 @@ def build_dataset(scn: Scenario) -> Dataset:
     for s in SPLITS:
         if not np.all(np.isfinite(q[s])):
             raise NnikError(f"the exact IK is not finite on the {s} set (singularity in the workspace?)", scn.source, "[workspace]")
-    meta = {"scenario": scn.name, "source": scn.source, "unit": scn.unit, "outputs": scn.outputs,
+    meta = {"scenario": scn.name, "scenario_hash": scn.fingerprint, "source": scn.source, "unit": scn.unit, "outputs": scn.outputs,
             "sampling": cfg["sampling"], "seed": seed, "truth": "analytic IK"}
     return Dataset(p, q, meta)
 
@@ -111,7 +111,7 @@ def _split_measured(scn: Scenario, seed: int) -> Dataset:
     idx = {"test": order[:n_test], "val": order[n_test:n_test + n_val], "train": order[n_test + n_val:]}
     p = {s: m.positions_mm[i] for s, i in idx.items()}
     q = {s: m.commands[i] for s, i in idx.items()}
-    meta = {"scenario": scn.name, "source": scn.source, "unit": scn.unit, "outputs": scn.outputs,
+    meta = {"scenario": scn.name, "scenario_hash": scn.fingerprint, "source": scn.source, "unit": scn.unit, "outputs": scn.outputs,
             "sampling": "measured rows", "seed": seed, "truth": f"held-out rows of {m.csv_path.name}",
             "duplicates_merged": int(m.duplicates_merged)}
     return Dataset(p, q, meta)

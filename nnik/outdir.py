@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import fcntl
 import os
 from pathlib import Path
 
@@ -13,6 +14,46 @@ def _nearest_existing(path: Path) -> Path:
     while not p.exists() and p != p.parent:
         p = p.parent
     return p
+
+
+LOCK_FILE = ".nnik.lock"
+_HELD: dict[str, int] = {}  # resolved directory -> descriptor holding its lock until the process ends
+
+
+def hold_lock(path: Path) -> None:
+    """Take OUTDIR/.nnik.lock for the rest of this process (flock: the kernel drops it when the
+    process ends, however it ends). A second nnik writing into the same directory gets one line."""
+    key = str(Path(path).resolve())
+    if key in _HELD:
+        return
+    lock = Path(path) / LOCK_FILE
+    try:
+        fd = os.open(lock, os.O_CREAT | os.O_RDWR, 0o644)
+    except OSError as exc:
+        raise NnikError(f"cannot create the lock file ({exc.strerror or exc})", str(lock)) from None
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except BlockingIOError:
+        try:
+            other = os.pread(fd, 32, 0).decode(errors="replace").strip()
+        finally:
+            os.close(fd)
+        raise NnikError(f"another nnik command{' (pid ' + other + ')' if other else ''} is writing into this "
+                        "directory; wait for it to finish or choose another -o", str(path)) from None
+    os.ftruncate(fd, 0)
+    os.pwrite(fd, str(os.getpid()).encode(), 0)
+    _HELD[key] = fd
+
+
+def release_locks() -> None:
+    """Drop every lock this process holds and remove the lock files (the end of a command)."""
+    for key, fd in list(_HELD.items()):
+        try:
+            (Path(key) / LOCK_FILE).unlink(missing_ok=True)
+        except OSError:
+            pass
+        os.close(fd)
+        del _HELD[key]
 
 
 def check_outdir(path: Path, create: bool = False) -> Path:
@@ -32,6 +73,8 @@ def check_outdir(path: Path, create: bool = False) -> Path:
             path.mkdir(parents=True, exist_ok=True)
         except OSError as exc:
             raise NnikError(f"cannot create the output directory ({exc.strerror or exc})", src) from None
+    if path.is_dir():
+        hold_lock(path)
     return path
 
 

@@ -32,8 +32,27 @@ def generate(scn: Scenario, outdir: Path) -> Dataset:
     return ds
 
 
+def check_data_matches(scn: Scenario, ds: Dataset, outdir: Path, what: str = "the scenario") -> None:
+    """data.npz must come from this very scenario (name and fingerprint)."""
+    got = ds.meta.get("scenario_hash")
+    if got != scn.fingerprint:
+        was = ds.meta.get("scenario", "?")
+        raise NnikError(f"data.npz was generated from {'scenario ' + repr(was) if was != scn.name else 'another version of it'}"
+                        f", not from {what} {scn.name!r} ({scn.source}); run `nnik generate` (or `nnik run`) again",
+                        str(outdir / DATA_FILE))
+
+
+def load_pair(outdir: Path) -> tuple[TrainedModel, Dataset]:
+    """model.pt and data.npz of OUTDIR, checked to belong to the same scenario."""
+    model = TrainedModel.load(outdir / MODEL_FILE)
+    ds = Dataset.load(outdir / DATA_FILE)
+    check_data_matches(model.scenario, ds, outdir, "the model's scenario")
+    return model, ds
+
+
 def train(scn: Scenario, outdir: Path, normalize: bool | None = None, progress: bool = True) -> TrainedModel:
     ds = Dataset.load(outdir / DATA_FILE)
+    check_data_matches(scn, ds, outdir)
     model = train_model(scn, ds, normalize=normalize, progress=progress)
     model.save(outdir / MODEL_FILE)
     export_onnx(model, outdir / ONNX_FILE)
@@ -47,8 +66,7 @@ def affine_baseline(ds: Dataset) -> np.ndarray:
 
 
 def evaluate(outdir: Path) -> dict:
-    model = TrainedModel.load(outdir / MODEL_FILE)
-    ds = Dataset.load(outdir / DATA_FILE)
+    model, ds = load_pair(outdir)
     scn = model.scenario
     p, q = ds.p["test"], ds.q["test"]
     pred = model.predict(p)
@@ -146,8 +164,7 @@ def export(outdir: Path):
     from nnik import fixedpoint as fx
     from nnik.emit.export import render_model_c, write_sources
 
-    model = TrainedModel.load(outdir / MODEL_FILE)
-    ds = Dataset.load(outdir / DATA_FILE)
+    model, ds = load_pair(outdir)
     scn = model.scenario
     im = quantize_kernel(model, ds, scn.export["kernel"])
     write_sources(render_model_c(im, scn.source), outdir / MLP_DIR)
@@ -359,8 +376,7 @@ def problem_for(outdir: Path):
     from nnik.implementations import Problem
     from nnik.implementations.mlp import remember_trained
 
-    model = TrainedModel.load(outdir / MODEL_FILE)
-    ds = Dataset.load(outdir / DATA_FILE)
+    model, ds = load_pair(outdir)
     scn = model.scenario
     problem = Problem(scn, ds, unit_um=scn.export["input_unit_um"])
     remember_trained(problem, model)

@@ -127,6 +127,19 @@ class Scenario:
         return list(self.mechanism.joint_names)
 
     @property
+    def fingerprint(self) -> str:
+        """Hash of what the scenario means: its TOML table and, for measured data, the CSV's bytes.
+        data.npz and model.pt carry it, so every stage can tell they belong together."""
+        import hashlib
+        import json
+
+        h = hashlib.sha256(json.dumps(self.raw, sort_keys=True, default=str).encode())
+        csv = getattr(self.mechanism, "csv_path", None)
+        if csv is not None and Path(csv).is_file():
+            h.update(Path(csv).read_bytes())
+        return h.hexdigest()[:16]
+
+    @property
     def unit(self) -> str:
         return self.actuator.unit
 
