@@ -169,8 +169,18 @@ class HybridImpl(LutImpl):
         ctx["p18_body"] = hybrid_asm.p18_body(self, ctx)
         return environment().get_template("lut2_ik.c.j2").render(**ctx)
 
+    def avr_lines(self, ctx) -> list[str]:
+        from nnik.implementations import hybrid_asm
+
+        return hybrid_asm.avr_lines(self, ctx)
+
+    def p18_items(self, ctx) -> list:
+        from nnik.implementations import hybrid_asm
+
+        return hybrid_asm.p18_items(self, ctx)
+
     def model_bytes(self) -> int:
-        return self.table.nbytes + 2 * 3 * 4
+        return self.table.nbytes
 
     def estimate(self, target: str) -> dict:
         from nnik.implementations.lut_cost import estimate

@@ -46,6 +46,10 @@ def _avr_align(al: int) -> list[str]:
 
 
 def avr_body(impl, ctx) -> str:
+    return lut_avr.wrap(avr_lines(impl, ctx), f"{impl.problem.name}_tab")
+
+
+def avr_lines(impl, ctx) -> list[str]:
     base = impl.base
     A = lut_avr.A
 
@@ -66,7 +70,7 @@ def avr_body(impl, ctx) -> str:
             code += [f"ld {lut_avr.U[0]}, X+", f"{'add' if i == 0 else 'adc'} {A[i]}, {lut_avr.U[0]}"]
         return code + ["sbiw r26, 4"]
 
-    return lut_avr.body(impl, ctx, base_hook=hook, after_clamp=after_clamp)
+    return lut_avr.lines(impl, ctx, base_hook=hook, after_clamp=after_clamp)
 
 
 def p18_mac_const(asm, d: list[str], src: list[str], k: int) -> None:
@@ -90,6 +94,10 @@ def p18_mac_const(asm, d: list[str], src: list[str], k: int) -> None:
 
 
 def p18_body(impl, ctx) -> str:
+    return lut_p18.render(impl, p18_items(impl, ctx), f"{impl.problem.name}_p18")
+
+
+def p18_items(impl, ctx) -> list:
     base = impl.base
 
     def after_clamp(asm, a):
@@ -110,4 +118,4 @@ def p18_body(impl, ctx) -> str:
         for i in range(4):
             asm += [f"movf {asm.at('o', 4 * o + i)}, W, B", f"{'addwf' if i == 0 else 'addwfc'} {asm.at('a', i)}, F, B"]
 
-    return lut_p18.body(impl, ctx, base_hook=hook, after_clamp=after_clamp)
+    return lut_p18.items(impl, ctx, base_hook=hook, after_clamp=after_clamp)

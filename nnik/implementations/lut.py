@@ -160,6 +160,16 @@ class LutImpl(Implementation):
         ctx["p18_body"] = lut_p18.body(self, ctx)
         return environment().get_template("lut2_ik.c.j2").render(**ctx)
 
+    def avr_lines(self, ctx) -> list[str]:
+        from nnik.implementations import lut_avr
+
+        return lut_avr.lines(self, ctx)
+
+    def p18_items(self, ctx) -> list:
+        from nnik.implementations import lut_p18
+
+        return lut_p18.items(self, ctx)
+
     # ---- cost -------------------------------------------------------------------------------------
     def model_bytes(self) -> int:
         return self.table.nbytes

@@ -199,8 +199,13 @@ def wrap(lines: list[str], tabsym: str) -> str:
 
 
 def body(impl, ctx, base_hook=None, after_clamp=None) -> str:
-    """The whole function body. base_hook(o) -> asm lines turning A (table acc of output o)
-    into the total before rounding (the hybrid's base); Z/X must be preserved by it."""
+    """The whole function body (see :func:`lines`)."""
+    return wrap(lines(impl, ctx, base_hook, after_clamp), f"{impl.problem.name}_tab")
+
+
+def lines(impl, ctx, base_hook=None, after_clamp=None) -> list[str]:
+    """The assembly lines. base_hook(o) -> lines turning A (table acc of output o) into the
+    total before rounding (the hybrid's base); Z/X must be preserved by it."""
     tab = impl.table
     g = tab.grid
     code = input_stage(impl, ctx["flipmask"], after_clamp)
@@ -217,4 +222,4 @@ def body(impl, ctx, base_hook=None, after_clamp=None) -> str:
         fin = impl.final_stage()
         code += finish(o, fin["final_shift"][o], fin["final_off_int"][o], impl.problem.code_range)
     code += ["clr r1", "clr %[flag]", "bld %[flag], 0"]
-    return wrap(code, f"{impl.problem.name}_tab")
+    return code

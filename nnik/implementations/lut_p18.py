@@ -283,8 +283,14 @@ def render(impl, items: list, w: str, extra_fields: str = "") -> str:
 
 
 def body(impl, ctx, base_hook=None, after_clamp=None) -> str:
-    """The PIC18 function (work struct + function). base_hook(asm, o) appends assembly that
-    turns the table accumulator A of output o into the total before rounding."""
+    """The PIC18 function (work struct + function), see :func:`items`."""
+    return render(impl, items(impl, ctx, base_hook, after_clamp), f"{impl.problem.name}_p18")
+
+
+def items(impl, ctx, base_hook=None, after_clamp=None) -> list:
+    """(kind, text) items of the __asm__ statement: ("asm", line) or ("macro", invocation).
+    base_hook(asm, o) appends assembly that turns the table accumulator A of output o into the
+    total before rounding."""
     w = f"{impl.problem.name}_p18"
     asm = Asm(f"_{w}")
     items = table_part(impl, asm, ctx["flipmask"], after_clamp)
@@ -293,4 +299,4 @@ def body(impl, ctx, base_hook=None, after_clamp=None) -> str:
         if base_hook is not None:
             base_hook(asm, o)
         finish(impl, asm, o, items)
-    return render(impl, items, w)
+    return items
