@@ -9,9 +9,13 @@ scheme in int16 values with int32 products.
   ``codegen/templates/poly_ik.c.j2``.
 
 Knobs: ``degree`` (total), optional ``degree_x``/``degree_y`` (per axis), ``fit``
-(minimax | lsq), ``coef_bits`` (16: int16 coefficients added after each shift; 32: int32
-coefficients added to the product before it, one rounding per step), ``split`` (the last
-factor of an odd output is a constant plus a finer residual: one more product, more bits),
+(minimax | lsq | best, or one per output; best = the one whose integer model errs least per output
+on a random probe set, never the check grid), ``trim`` (a constant multiplier may give up that
+many bits so that its step shifts by exactly 16), ``rounding`` (round half up in each step, or
+floor), ``coef_bits`` (16: int16 coefficients added after each shift; 32: int32
+coefficients added to the product before it, one rounding per step), ``split`` (bool or one per
+output: the last factor of an odd output is a constant plus a finer residual: one more product,
+more bits),
 ``guard`` (extra headroom bits; when given, the range analysis must prove it as is).
 """
 
@@ -24,10 +28,26 @@ from nnik.implementations.base import Implementation, IntRun
 from nnik.implementations.problem import Problem
 from nnik.implementations import poly_fit, poly_int
 
-DEFAULTS = {"degree": 5, "fit": "minimax", "coef_bits": 16, "split": False}
+DEFAULTS = {"degree": 5, "fit": "best", "coef_bits": 16, "split": False, "trim": 4, "rounding": True}
 KNOBS = set(DEFAULTS) | {"degree_x", "degree_y", "guard"}
 MAX_LOWER = 12  # rounds of "lower the failing value's exponent" before giving up
 RANGE_GRID = 257
+
+
+FITS = ("minimax", "lsq", "best")
+PROBE = 200_000
+
+
+def _probe(p: Problem) -> tuple[np.ndarray, np.ndarray]:
+    """Points to choose between fits on: random in-domain inputs (analytic) or the fit rows."""
+    if "poly_probe" not in p.cache:
+        if p.analytic:
+            pts = np.random.default_rng(11).integers(p.lo, p.hi + 1, (PROBE, 2))
+            p.cache["poly_probe"] = (pts, p.truth(pts))
+        else:
+            x, q = p.fit_samples()
+            p.cache["poly_probe"] = (np.rint(x).astype(np.int64), q)
+    return p.cache["poly_probe"]
 
 
 def _symmetry(p: Problem) -> list:
@@ -42,10 +62,21 @@ class PolyImpl(Implementation):
 
     @classmethod
     def ladder(cls, problem: Problem) -> list[dict]:
+        """Total degree 2..7; per degree no split, then the split of each output that has an odd
+        factor (u or v), then of both; each without and with rounding in the steps (floor is 3 cycles
+        a step cheaper on AVR); the fit chosen per output ("best")."""
+        sym = _symmetry(problem)
+        odd = [any(all(c[a] == 1 for c in s.classes) for a in range(2)) for s in sym]
+        splits = [False]
+        if odd[0] and odd[1]:
+            splits += [[True, False], [False, True], True]
+        elif odd[0] or odd[1]:
+            splits += [[odd[0], odd[1]]]
         out = []
         for d in range(2, 8):
-            out.append({"degree": d, "fit": "minimax", "coef_bits": 16, "split": False})
-            out.append({"degree": d, "fit": "minimax", "coef_bits": 32, "split": True})
+            for sp in splits:
+                out += [{"degree": d, "fit": "best", "coef_bits": 16, "split": sp, "trim": 4, "rounding": r}
+                        for r in ((False, True) if d >= 4 else (True,))]
         return out
 
     @classmethod
@@ -59,14 +90,33 @@ class PolyImpl(Implementation):
             raise NnikError(f"poly: degree must be an integer in 1..9, got {deg!r}")
         if cfg["coef_bits"] not in (16, 32):
             raise NnikError(f"poly: coef_bits must be 16 or 32, got {cfg['coef_bits']!r}")
+        split = cfg["split"]
+        if not (isinstance(split, bool) or (isinstance(split, list) and len(split) == 2
+                                            and all(isinstance(v, bool) for v in split))):
+            raise NnikError(f"poly: split must be true, false or a list of two booleans, got {split!r}")
+        how = cfg["fit"]
+        hows = how if isinstance(how, list) else [how, how]
+        if len(hows) != 2 or any(h not in FITS for h in hows):
+            raise NnikError(f"poly: fit must be one of {', '.join(FITS)} or a list of two, got {how!r}")
         self = cls(problem, cfg)
         self.maps = poly_fit.axis_maps(problem)
         self.sym = _symmetry(problem)
+        if "best" in hows:
+            # per output, the fit whose integer model errs least on a probe set (not the check grid)
+            trial = {h: cls.fit(problem, {**cfg, "fit": h}) for h in ("minimax", "lsq")}
+            pts, truth = _probe(problem)
+            err = {h: np.abs(im.run(pts).pre - truth).max(0) for h, im in trial.items()}
+            hows = [min(("minimax", "lsq"), key=lambda h: err[h][o]) if hows[o] == "best" else hows[o]
+                    for o in range(2)]
+        self.fits = hows
         t, q = poly_fit.fit_data(problem)
         self.coefs = []
         for o in range(2):
             terms = poly_fit.monomials(self.sym[o], deg, cfg.get("degree_x"), cfg.get("degree_y"))
-            c = poly_fit.fit_poly(t, q[:, o], terms, cfg["fit"])
+            key = ("poly_coefs", o, tuple(terms), hows[o])
+            if key not in problem.cache:
+                problem.cache[key] = poly_fit.fit_poly(t, q[:, o], terms, hows[o])
+            c = problem.cache[key]
             self.coefs.append((float(c[0]), {ij: float(v) for ij, v in zip(terms, c[1:]) if v != 0.0}))
         self._build()
         return self
@@ -87,12 +137,15 @@ class PolyImpl(Implementation):
         u, v = poly_int.Node("in", name="u"), poly_int.Node("in", name="v")
         shared = {"u": u, "v": v, "u2": poly_int.Node("mac", u, u, name="u2"),
                   "v2": poly_int.Node("mac", v, v, name="v2"), "uv": poly_int.Node("mac", u, v, name="uv")}
-        self.plans = [poly_int.plan_output(coefs, c00, shared, self.config["split"], env)
-                      for c00, coefs in self.coefs]
+        split = self.config["split"]
+        split = split if isinstance(split, list) else [split, split]
+        self.plans = [poly_int.plan_output(coefs, c00, shared, sp, env)
+                      for (c00, coefs), sp in zip(self.coefs, split)]
         guard = self.config.get("guard")
         lower: dict = {}
         for _ in range(MAX_LOWER + 1):
-            prog = poly_int.build_program(self.plans, env, self.config["coef_bits"], guard or 0, ur, lower)
+            prog = poly_int.build_program(self.plans, env, self.config["coef_bits"], guard or 0, ur, lower,
+                                          trim=self.config["trim"], rounding=self.config["rounding"])
             bad = poly_int.prove(prog, ur)
             if bad is None:
                 self.prog = prog
@@ -124,7 +177,12 @@ class PolyImpl(Implementation):
         if "degree_x" in c or "degree_y" in c:
             deg += f" (x <= {c.get('degree_x', c['degree'])}, y <= {c.get('degree_y', c['degree'])})"
         n = sum(len(k) + 1 for _, k in self.coefs) if hasattr(self, "coefs") else 0
-        return (f"poly {deg}, {c['fit']}, {c['coef_bits']}-bit coefficients{', split' if c['split'] else ''}, "
+        sp = c["split"]
+        sp_text = (", split" if sp is True else "") if not isinstance(sp, list) else \
+            (", split " + "+".join(n for n, v in zip(self.problem.outputs, sp) if v) if any(sp) else "")
+        fits = getattr(self, "fits", None) or [c["fit"]] * 2
+        fit_text = fits[0] if fits[0] == fits[1] else "/".join(fits)
+        return (f"poly {deg}, {fit_text}, {c['coef_bits']}-bit coefficients{sp_text}, "
                 f"{n} coefficients; {self.symmetry_text() if hasattr(self, 'sym') else ''}")
 
     @property
@@ -162,17 +220,7 @@ class PolyImpl(Implementation):
             avr_steps=poly_c.avr_steps(self.prog, name),
             avr_in=poly_c.input_lines(self.maps, p.lo, p.hi, name=name),
             avr_out=poly_c.output_lines(self.prog, p.code_range, lambda a, b: f"{name}_mul({a}, {b})", name=name),
-            avr_asm=poly_avr.body(self.prog, self._dac_lines()), p18_body=p18_body(self))
-
-    def _dac_lines(self, indent: str = "    ") -> list[str]:
-        from nnik.implementations.c_common import i32
-
-        cr = self.problem.code_range
-        if cr is None:
-            return []
-        lo, hi = i32(cr[0]), i32(cr[1])
-        return [f"{indent}if (out[{k}] < {lo}) out[{k}] = {lo};\n{indent}else if (out[{k}] > {hi}) out[{k}] = {hi};"
-                for k in range(2)]
+            avr_asm=poly_avr.body(self.prog, p.code_range), p18_body=p18_body(self))
 
     def estimate(self, target: str) -> dict:
         from nnik.implementations.poly_cost import estimate

@@ -44,8 +44,12 @@ def _add_const(regs: list[str], k: int) -> list[str]:
     return out
 
 
-def body(prog: Program, code_range_lines: list[str]) -> list[str] | None:
-    """The asm statement (C lines), or None when the values do not fit the register pairs."""
+def body(prog: Program, code_range) -> list[str] | None:
+    """The asm statement (C lines), or None when the values do not fit the register pairs.
+    The DAC clamp is done in the assembly on the int16 result (or in C after it)."""
+    from nnik.implementations.c_common import i32
+
+    c_clamp = []
     # schedule: each output's sum right after the last step it needs (shorter live ranges)
     done_at = {"u": -1, "v": -1}
     for i, st in enumerate(prog.steps):
@@ -127,13 +131,25 @@ def body(prog: Program, code_range_lines: list[str]) -> list[str] | None:
         asm += _add_const(["r20", "r21", "r22", "r23"], o.C + (1 << (o.s - 1)))
         lo_b, hi_b = prog.bounds[f"out{k}"]
         r_lo, r_hi = (lo_b + (1 << (o.s - 1))) >> o.s, (hi_b + (1 << (o.s - 1))) >> o.s
-        if o.s >= 16 and -32768 <= r_lo and r_hi <= 32767:
-            asm += ["asr r23", "ror r22"] * (o.s - 16)
+        if 8 <= o.s and -32768 <= r_lo and r_hi <= 32767:
+            asm += ["asr r23", "ror r22"] * (o.s - 16) + ["lsl r21", "rol r22", "rol r23"] * (16 - o.s)
+            if code_range is not None:
+                clo, chi = code_range[0] - o.offset, code_range[1] - o.offset
+                if r_lo < clo and -32768 <= clo <= 32767:
+                    asm += [f"ldi r20, {clo & 0xFF}", f"ldi r21, {(clo >> 8) & 0xFF}", "cp r22, r20",
+                            "cpc r23, r21", "brge 1f", "movw r22, r20", "1:"]
+                if r_hi > chi and -32768 <= chi <= 32767:
+                    asm += [f"ldi r20, {chi & 0xFF}", f"ldi r21, {(chi >> 8) & 0xFF}", "cp r20, r22",
+                            "cpc r21, r23", "brge 1f", "movw r22, r20", "1:"]
+                if not (-32768 <= clo <= 32767 and -32768 <= chi <= 32767):
+                    c_clamp.append(k)
             asm += ["mov r20, r23", "lsl r20", "sbc r20, r20", "mov r21, r20"]
             res = ["r22", "r23", "r20", "r21"]
         else:
             asm += ["asr r23", "ror r22", "ror r21", "ror r20"] * o.s
             res = ["r20", "r21", "r22", "r23"]
+            if code_range is not None:
+                c_clamp.append(k)
         asm += _add_const(res, o.offset)
         asm += [f"std Z+{4 * k + b}, {res[b]}" for b in range(4)]
         release(t)
@@ -150,4 +166,7 @@ def body(prog: Program, code_range_lines: list[str]) -> list[str] | None:
     lines.append('            : "z" (out)')
     lines.append("            : " + ", ".join(f'"{c}"' for c in clob) + ', "memory");')
     lines.append("    }")
-    return lines + code_range_lines
+    for k in c_clamp:
+        lo, hi = i32(code_range[0]), i32(code_range[1])
+        lines += [f"    if (out[{k}] < {lo}) out[{k}] = {lo};", f"    else if (out[{k}] > {hi}) out[{k}] = {hi};"]
+    return lines

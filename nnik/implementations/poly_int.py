@@ -204,9 +204,11 @@ def _topo(plans: list[OutputPlan]) -> list[Node]:
 
 
 def build_program(plans: list[OutputPlan], grid_env: dict, coef_bits: int, guard: int,
-                  urange: list[tuple[int, int]], lower: dict | None = None) -> Program:
+                  urange: list[tuple[int, int]], lower: dict | None = None, trim: int = 0,
+                  rounding: bool = True) -> Program:
     """Exponents from the sampled real ranges (minus `lower` extra bits per node), then the
-    integer steps."""
+    integer steps. `trim`: a constant multiplier may give up to this many bits so that its step
+    shifts by 16 (free on an 8-bit MCU); `rounding`: round half up in each step (else floor)."""
     lower = lower or {}
     env = dict(grid_env)
     nodes = _topo(plans)
@@ -236,13 +238,15 @@ def build_program(plans: list[OutputPlan], grid_env: dict, coef_bits: int, guard
             eb, b = exps[n.b.name], n.b.name
         else:
             eb = min(const_exp(n.b), e + F_MAX - ea)
+            if 16 < ea + eb - e <= 16 + trim:
+                eb = e + 16 - ea
             b = int(round(n.b * 2.0**eb))
             if b == 0:
                 raise NnikError(f"poly: coefficient {n.b:g} vanishes at 2^-{eb}")
         f = ea + eb - e
         if not 0 <= f <= F_MAX:
             raise NnikError(f"poly: shift {f} of {n.name} outside [0, {F_MAX}]")
-        half = (1 << (f - 1)) if f > 0 else 0
+        half = (1 << (f - 1)) if f > 0 and rounding else 0
         if isinstance(n.add, Node):
             K, L = half, n.add.name
             if exps[n.add.name] != e:
