@@ -12,9 +12,11 @@ region; calls longer than 65535 cycles are handled by counting Timer1 overflows
 
 Sizes: ``flash_bytes``/``ram_bytes`` are those of the whole harness program with a
 one-vector table (text+data / data+bss from avr-size; RAM excludes the stack).
-``model_*`` are the differences between that program and the same program linked
-with a trivial stub of the same API (codegen/harness/nnik_stub_model.c), so they
-include any libgcc/libm routines that only the model pulls in.
+``model_*`` are the model's own bytes, read from the linker map of the smallest
+program that calls it (codegen/harness/nnik_size_main.c; see nnik.targets.avr_sizes):
+its code, PROGMEM tables and data and every libgcc/libm/libc routine it pulls in
+(listed in ``model_runtime``).  ``stub_delta_*`` are the older figures (harness with
+the model minus harness with a stub), which net out routines the harness also uses.
 """
 from __future__ import annotations
 
@@ -24,6 +26,7 @@ from typing import Dict, List, Optional, Sequence
 
 import numpy as np
 
+from .avr_sizes import model_sizes
 from .toolchain import (HARNESS_DIR, TargetError, c_ident, find_tool, progress_bar, require,
                         run, split_batches, to_int32, tool_version, write_harness_inputs)
 
@@ -141,6 +144,21 @@ def run_avr(sources: Sequence[Path], include_dirs: Sequence[Path], name: str, ve
     size_model = _sizes(build("size_model", vec[:1], objs), wd)
     size_stub = _sizes(build("size_stub", vec[:1], [stub_obj]), wd)
 
+    def link_size_main(tag: str, call: int, model_objs: List[Path]) -> str:
+        bdir = wd / tag
+        bdir.mkdir(parents=True, exist_ok=True)
+        mobj = bdir / "nnik_size_main.o"
+        run([gcc, *flags, f"-DNNIK_IK={name}_ik", f"-DNNIK_N_IN={n_in}", f"-DNNIK_N_OUT={n_out}",
+             f"-DNNIK_CALL={call}", "-c", HARNESS_DIR / "nnik_size_main.c", "-o", mobj], "avr-gcc size main",
+            cwd=bdir, log=bdir / "main.log")
+        mapf = bdir / "prog.map"
+        run([gcc, f"-mmcu={MCU}", opt, "-Wl,--gc-sections", f"-Wl,-Map={mapf}", "-o", bdir / "prog.elf", mobj,
+             *model_objs, "-lm"], "avr-gcc link", cwd=bdir, log=bdir / "link.log")
+        return mapf.read_text(errors="replace")
+
+    own = model_sizes(link_size_main("size_own", 1, objs), link_size_main("size_none", 0, []),
+                      {str(o) for o in objs})
+
     simavr = find_tool("simavr")
     outputs = np.zeros((n, n_out), dtype=np.int64)
     rflags = np.zeros(n, dtype=np.int64)
@@ -170,8 +188,11 @@ def run_avr(sources: Sequence[Path], include_dirs: Sequence[Path], name: str, ve
         "cycles_max": int(cycles.max()),
         "flash_bytes": size_model["flash"],
         "ram_bytes": size_model["ram"],
-        "model_flash_bytes": size_model["flash"] - size_stub["flash"],
-        "model_ram_bytes": size_model["ram"] - size_stub["ram"],
+        "model_flash_bytes": own["flash"],
+        "model_ram_bytes": own["ram"],
+        "model_runtime": own["runtime"],
+        "stub_delta_flash_bytes": size_model["flash"] - size_stub["flash"],
+        "stub_delta_ram_bytes": size_model["ram"] - size_stub["ram"],
         "clock_hz": CLOCK_HZ,
         "cycle_hz": CLOCK_HZ,
         "us_mean": float(cycles.mean()) / CLOCK_HZ * 1e6,

@@ -16,9 +16,16 @@ instruction cycles (Fosc/4): ``cycle_hz`` is 4 MHz for a 16 MHz clock.
 Sizes (from the gplink map): flash = program addresses used (bytes; ROM words =
 bytes/2); RAM = data sections below the SFR area, excluding the software stack
 reserved by ``#pragma stack``.  Whole-program figures are for a one-vector
-harness; ``model_*`` subtract the same program linked with a trivial stub
-(codegen/harness/nnik_stub_model.c), so they include libsdcc/libm routines that
-only the model pulls in.
+harness.  ``model_*`` are the model's own bytes, read from the map of the smallest
+program that calls it (codegen/harness/nnik_size_main.c; see nnik.targets.pic18_sizes):
+its code, tables and data and every libsdcc/libm18f routine it pulls in (listed in
+``model_runtime``).  ``stub_delta_*`` are the older figures (harness with the model
+minus harness with a stub), which net out routines the harness also uses.
+
+The harness disables the watchdog in its configuration bits (gpsim runs it: an
+11.5 M-cycle batch used to reset the chip), and every vector's end marker checks
+the harness's vector index, so a reset of any kind is a TargetError, not results
+shifted by a restart.
 
 SDCC pic16 limits a model must respect: no ``long long``/``int64_t`` (a syntax
 error), int is 16 bits.  ``>>`` on negative signed values is arithmetic.
@@ -31,6 +38,7 @@ from typing import Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 
+from .pic18_sizes import model_sizes
 from .toolchain import (HARNESS_DIR, TargetError, c_ident, find_tool, pic16_runtime,
                         progress_bar, require, run, split_batches, to_int32, tool_version,
                         write_harness_inputs)
@@ -82,12 +90,13 @@ def parse_map(text: str) -> Tuple[Dict[str, int], int, int]:
 def make_script(syms: Dict[str, int], n: int, n_out: int) -> str:
     try:
         a_start, a_end, a_done = (syms[s] for s in ("_nnik_mark_start", "_nnik_mark_end", "_nnik_done"))
-        a_out, a_flag = syms["_nnik_out"], syms["_nnik_flag"]
+        a_out, a_flag, a_idx = syms["_nnik_out"], syms["_nnik_flag"], syms["_nnik_idx"]
     except KeyError as e:
         raise TargetError(f"gplink map lacks harness symbol {e}") from None
     lines = [f"break e 0x{a_start:x}", f"break e 0x{a_end:x}", f"break e 0x{a_done:x}",
              "run", "echo @@S -1", "cycles", "run", "echo @@E -1", "cycles"]
     reads = [f"reg(0x{a_out + k:x})" for k in range(4 * n_out)] + [f"reg(0x{a_flag:x})"]
+    reads += [f"reg(0x{a_idx:x})", f"reg(0x{a_idx + 1:x})"]  # the harness's own vector index
     for i in range(n):
         lines += ["run", f"echo @@S {i}", "cycles", "run", f"echo @@E {i}", "cycles",
                   f"echo @@R {i}", *reads]
@@ -100,8 +109,19 @@ _REG = re.compile(r"\] = \$([0-9A-Fa-f]+) = 0b[01]+")
 _TAG = re.compile(r"@@([SERD])(?: (-?\d+))?")
 
 
+_RESET = re.compile(r"^\s*(?:Reset:\s*(?!POR_RESET)\w+|WDT expired.*|Reset on .*)$", re.MULTILINE)
+
+
 def parse_gpsim_output(text: str, n: int, n_out: int):
-    """Parse a harness gpsim session.  Returns outputs, flags, cycles, overhead."""
+    """Parse a harness gpsim session.  Returns outputs, flags, cycles, overhead.
+
+    A reset after the program started (watchdog, stack over/underflow, ...) is a TargetError:
+    the harness would restart and the markers would pair results with the wrong vectors."""
+    m = _RESET.search(text)
+    if m:
+        before = [int(t) for t in re.findall(r"@@S (\d+)", text[:m.start()])]
+        where = f"during vector {before[-1]}" if before else "before the first vector"
+        raise TargetError(f"gpsim: the chip reset {where} ({m.group(0).strip()})")
     start: Dict[int, int] = {}
     end: Dict[int, int] = {}
     regs: Dict[int, List[int]] = {}
@@ -141,11 +161,14 @@ def parse_gpsim_output(text: str, n: int, n_out: int):
     outputs = np.zeros((n, n_out), dtype=np.int64)
     flags = np.zeros(n, dtype=np.int64)
     cycles = np.zeros(n, dtype=np.int64)
-    nbytes = 4 * n_out + 1
+    nbytes = 4 * n_out + 3
     for i in range(n):
         if i not in start or i not in end or len(regs.get(i, [])) != nbytes:
             raise TargetError(f"gpsim: incomplete results for vector {i}")
         b = regs[i]
+        if b[-2] | b[-1] << 8 != i:
+            raise TargetError(f"gpsim: vector {i} ended with the harness at vector {b[-2] | b[-1] << 8} "
+                              "(the chip restarted?)")
         for k in range(n_out):
             outputs[i, k] = to_int32(b[4 * k] | b[4 * k + 1] << 8 | b[4 * k + 2] << 16 | b[4 * k + 3] << 24)
         f = b[4 * n_out]
@@ -214,6 +237,19 @@ def run_pic18(sources: Sequence[Path], include_dirs: Sequence[Path], name: str, 
     _, _, flash_m, ram_m = build("size_model", vec[:1], objs)
     _, _, flash_s, ram_s = build("size_stub", vec[:1], [stub])
 
+    def link_size_main(tag: str, call: int, model_objs: List[Path]) -> str:
+        bdir = wd / tag
+        bdir.mkdir(parents=True, exist_ok=True)
+        mobj = cc(HARNESS_DIR / "nnik_size_main.c", bdir / "nnik_size_main.o",
+                  [f"-DNNIK_IK={name}_ik", f"-DNNIK_N_IN={n_in}", f"-DNNIK_N_OUT={n_out}", f"-DNNIK_CALL={call}"])
+        hexf = bdir / "prog.hex"
+        run([gplink, "-q", "-m", "-w", "-s", rt["linker_script"], "-o", hexf, rt["crt0i"], mobj,
+             *model_objs, sfr, rt["libm"], rt["libsdcc"]], "gplink", cwd=bdir, log=bdir / "link.log")
+        return (bdir / "prog.map").read_text(errors="replace")
+
+    own = model_sizes(link_size_main("size_own", 1, objs), link_size_main("size_none", 0, []),
+                      {o.with_suffix(".asm").name for o in objs})
+
     gpsim = find_tool("gpsim")
     outputs = np.zeros((n, n_out), dtype=np.int64)
     rflags = np.zeros(n, dtype=np.int64)
@@ -244,8 +280,11 @@ def run_pic18(sources: Sequence[Path], include_dirs: Sequence[Path], name: str, 
         "cycles_max": int(cycles.max()),
         "flash_bytes": flash_m,
         "ram_bytes": ram_m,
-        "model_flash_bytes": flash_m - flash_s,
-        "model_ram_bytes": ram_m - ram_s,
+        "model_flash_bytes": own["flash"],
+        "model_ram_bytes": own["ram"],
+        "model_runtime": own["runtime"],
+        "stub_delta_flash_bytes": flash_m - flash_s,
+        "stub_delta_ram_bytes": ram_m - ram_s,
         "clock_hz": CLOCK_HZ,
         "cycle_hz": CYCLE_HZ,
         "us_mean": float(cycles.mean()) / CYCLE_HZ * 1e6,

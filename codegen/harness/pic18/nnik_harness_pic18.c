@@ -20,6 +20,8 @@
  * "nnik_vectors.inc" (rows "{ in0, in1 }," of the vector table).
  */
 #pragma stack 0x500 0xff
+/* gpsim runs the watchdog; left on, it reset the chip after about 11.5 M cycles of a batch */
+#pragma config WDT=OFF
 
 #include <stdint.h>
 
