@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 from sklearn.linear_model import LinearRegression
 
+from nnik.c_hash import dir_hash
 from nnik.data import Dataset, build_dataset
 from nnik.errors import NnikError
 from nnik.evaluate import error_stats, position_error_um, relative_pct
@@ -259,6 +260,7 @@ def verify(outdir: Path, target: str = "host"):
     res["other_kernel"] = {"kernel": alt_im.kernel,
                            **verify_host(alt_im, outdir / MLP_DIR / alt_im.kernel, {"test": inputs["test"]})}
     res["bit_exact"] = res["bit_exact"] and res["other_kernel"]["bit_exact"]
+    res["c_hash"] = dir_hash(outdir / MLP_DIR, im.name)
     metrics = load_metrics(outdir)
     metrics["host"] = res
     metrics["baselines"] = _verify_baselines_host(outdir, metrics["baselines"], ds, inputs)
@@ -366,6 +368,7 @@ def verify_target(outdir: Path, target: str) -> dict:
     if "cycles" in base["float"]:
         res["speedup_vs_float"] = base["float"]["cycles"] / main["cycles"]
     res["estimate"] = estimate_row(im, target, main)
+    res["c_hash"] = dir_hash(outdir / MLP_DIR, im.name)
     write_metrics(outdir, {"targets": {**metrics.get("targets", {}), target: res}})
     return res
 

@@ -128,12 +128,15 @@ class Scenario:
 
     @property
     def fingerprint(self) -> str:
-        """Hash of what the scenario means: its TOML table and, for measured data, the CSV's bytes.
-        data.npz and model.pt carry it, so every stage can tell they belong together."""
+        """Hash of what the data and the trained model depend on: the TOML tables other than
+        [export], [target] and the description, and for measured data the CSV's bytes. data.npz
+        and model.pt carry it, so every stage can tell they belong together; changing the
+        target or the export options needs no new data."""
         import hashlib
         import json
 
-        h = hashlib.sha256(json.dumps(self.raw, sort_keys=True, default=str).encode())
+        kept = {k: v for k, v in self.raw.items() if k not in ("export", "target", "description")}
+        h = hashlib.sha256(json.dumps(kept, sort_keys=True, default=str).encode())
         csv = getattr(self.mechanism, "csv_path", None)
         if csv is not None and Path(csv).is_file():
             h.update(Path(csv).read_bytes())

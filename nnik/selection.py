@@ -13,6 +13,7 @@ import shutil
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from nnik.c_hash import files_hash
 from nnik.errors import NnikError
 from nnik.implementations import FAMILIES, Implementation, Problem
 from nnik.implementations.accuracy import accuracy
@@ -39,7 +40,8 @@ class Candidate:
         r = {"family": self.family, "config": self.config, "picked": picked}
         if self.skipped:
             return {**r, "skipped": self.skipped}
-        r.update(describe=self.impl.describe(), model_hash=self.impl.source_hash(), model_bytes=self.impl.model_bytes(),
+        r.update(describe=self.impl.describe(), model_hash=self.impl.source_hash(), c_hash=files_hash(self.impl.render_c()),
+                 model_bytes=self.impl.model_bytes(),
                  pre_max_abs=self.acc["pre_max_abs"], pre_max=self.acc["pre_max"], rms=self.acc["rms"],
                  delivered_max_abs=self.acc["delivered_max_abs"], check_points=self.acc["points"],
                  estimate={t: self.est[t] for t in self.est})
@@ -140,7 +142,7 @@ def no_pick_reason(cands: list[Candidate], bests: dict[str, Candidate], target: 
 
 def write_choice(c_dir: Path, bests: dict[str, Candidate], pick: Candidate | None) -> None:
     """c/alt/<family>/ for every family's best, c/NAME.{c,h} for the pick (fresh files)."""
-    from nnik.export import write_sources
+    from nnik.emit.export import write_sources
 
     alt = c_dir / ALT_DIR
     for fam, c in bests.items():

@@ -8,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
+from nnik.c_hash import files_hash
 from nnik.errors import NnikError
 from nnik.implementations.base import Implementation
 
@@ -15,7 +16,7 @@ HOST_RANDOM = 20_000
 
 
 def _write(impl: Implementation, c_dir: Path) -> None:
-    from nnik.export import write_sources
+    from nnik.emit.export import write_sources
 
     write_sources(impl.render_c(), c_dir)
 
@@ -58,7 +59,7 @@ def verify_host(impl: Implementation, c_dir: Path, vectors: np.ndarray | None = 
     r = impl.run(vec)
     bad = np.any(c["out"] != r.out, axis=1) | (c["flags"] != r.flags)
     return {"points": int(len(vec)), "mismatches": int(bad.sum()), "bit_exact": bool(not bad.any()),
-            "model_hash": impl.source_hash()}
+            "model_hash": impl.source_hash(), "c_hash": files_hash(impl.render_c())}
 
 
 def verify_on_target(impl: Implementation, target: str, c_dir: Path, workdir: Path, portable: bool = False,
@@ -86,4 +87,4 @@ def verify_on_target(impl: Implementation, target: str, c_dir: Path, workdir: Pa
             "flash_bytes": int(res["model_flash_bytes"]), "ram_bytes": int(res["model_ram_bytes"]),
             "points": int(len(vec)), "mismatches": int(bad.sum()), "bit_exact": bool(not bad.any()),
             "compiler": res["compiler"], "path": "portable" if portable else "fast",
-            "model_hash": impl.source_hash()}
+            "model_hash": impl.source_hash(), "c_hash": files_hash(impl.render_c())}

@@ -113,7 +113,8 @@ def build(ctx) -> Section:
                                          + ": the delivered commands above", "good"))
 
     host = m.get("host")
-    chip_rows("C on host", host if isinstance(host, dict) else None, "no `host` section in metrics.json")
+    chip_rows("C on host", host if isinstance(host, dict) and "not_run" not in host else None,
+              host["not_run"] if isinstance(host, dict) and "not_run" in host else "no `host` section in metrics.json")
     for tname in target_names(m):
         tm, reason = target_status(m, tname)
         chip_rows(f"C on {tname}", tm, reason)

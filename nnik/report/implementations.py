@@ -7,8 +7,7 @@ holds (its hash is recomputed from the file); otherwise the row says the C chang
 
 from __future__ import annotations
 
-import hashlib
-
+from nnik.c_hash import dir_hash
 from nnik.report.document import D_CYC, D_UNIT, Fig, Section, Table, keypath, lookup, not_run_cell, num, txt
 
 PNG_FRONT = "implementations_front.png"
@@ -17,11 +16,7 @@ CHIPS = ("avr", "pic18")
 
 
 def _c_hash(ctx, family: str) -> str | None:
-    name = ctx.m.get("name", "")
-    f = ctx.inp.model_dir / "c" / "alt" / family / f"{name}.c"
-    if not f.is_file():
-        return None
-    return hashlib.sha256(f.read_bytes()).hexdigest()[:16]
+    return dir_hash(ctx.inp.model_dir / "c" / "alt" / family, ctx.m.get("name", ""))
 
 
 def _check_cell(r: dict, where: str) -> str:
@@ -99,7 +94,7 @@ def build(ctx) -> Section:
         row.append(num(r.get("pre_max"), D_UNIT, keypath(*base, "pre_max")))
         row.append(num(max(r.get("rms") or [float("nan")]), D_UNIT))
         current = _c_hash(ctx, r["family"])
-        if current != r.get("model_hash"):
+        if current is None or current != r.get("c_hash"):
             row.append(not_run_cell("the C in c/alt/" + r["family"] + "/ changed since it was measured", 5))
         else:
             for chip in CHIPS:

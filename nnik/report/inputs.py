@@ -46,12 +46,29 @@ def load_metrics(model_dir: Path) -> dict:
     for k in ("name", "outputs", "unit"):
         if k not in metrics:
             raise NnikError(f"malformed metrics.json: missing {k!r}", str(path))
-    return metrics
+    return drop_stale(model_dir, metrics)
 
 
 def short_exc(exc: BaseException) -> str:
     s = str(exc).strip().splitlines()
     return f"{type(exc).__name__}: {s[0]}" if s else type(exc).__name__
+
+
+STALE = "the C in c/mlp/ changed since this was measured (run `nnik verify` again)"
+
+
+def drop_stale(model_dir: Path, metrics: dict) -> dict:
+    """Results of the MLP's C (host, avr, pic18) stay only while c/mlp/NAME.{c,h} hash as they
+    did when the result was measured; others become {"not_run": STALE}."""
+    from nnik.c_hash import dir_hash
+
+    now = dir_hash(Path(model_dir) / "c" / "mlp", str(metrics.get("name", "")))
+    if isinstance(metrics.get("host"), dict) and metrics["host"].get("c_hash") != now:
+        metrics["host"] = {"not_run": STALE}
+    for t, res in list((metrics.get("targets") or {}).items()):
+        if isinstance(res, dict) and "not_run" not in res and res.get("c_hash") != now:
+            metrics["targets"][t] = {"not_run": STALE}
+    return metrics
 
 
 def load_inputs(model_dir: Path) -> Inputs:

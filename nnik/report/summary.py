@@ -47,7 +47,9 @@ def summary_rows(metrics: dict) -> list[tuple[str, ...]]:
     else:
         rows.append(("fixed point (host model)", "not run", "no `fixed` section in metrics.json"))
     host = metrics.get("host")
-    if isinstance(host, dict):
+    if isinstance(host, dict) and "not_run" in host:
+        rows.append(("C on host", "not run", str(host["not_run"])))
+    elif isinstance(host, dict):
         ok = bool(host.get("bit_exact"))
         rows.append(("C on host", "bit-exact" if ok else "NOT bit-exact",
                      f"{host.get('mismatches', '?')} mismatches over {host.get('points', '?')} points"))
