@@ -62,7 +62,7 @@ def estimate(im, target: str, profile: str | None = None, clock_hz: int = 16_000
 
     Returns {cycles, us, flash_bytes, ram_bytes, profile, target, kernel, validated, breakdown,
     notes}. `us` uses clock_hz (PIC18: 4 clocks per instruction cycle). `validated` is True when
-    the profile was calibrated on a simulator, the code generator is unchanged since, and every
+    the profile was calibrated on a simulator, the emitted C is unchanged since (validity), and every
     primitive the model uses was part of the calibration (1-2 hidden layers)."""
     prof = resolve_profile(target, profile)
     cal = load_calibration(prof)
