@@ -161,19 +161,22 @@ def other_kernel(kernel: str) -> str:
 def export(outdir: Path):
     """Quantise model.pt, write OUTDIR/c/mlp/NAME.{h,c} (the scenario's kernel) and, for
     comparison, OUTDIR/c/mlp/<other kernel>/NAME.{h,c}, and the baselines in OUTDIR/c/;
-    returns both integer models (scenario's kernel first)."""
+    returns both integer models (scenario's kernel first). Nothing is written unless every
+    file was generated and the range analysis held (see nnik.atomic_write)."""
     from nnik import fixedpoint as fx
-    from nnik.emit.export import render_model_c, write_sources
+    from nnik.atomic_write import Staged
+    from nnik.emit.export import render_model_c
 
     model, ds = load_pair(outdir)
     scn = model.scenario
+    staged = Staged(outdir)
     im = quantize_kernel(model, ds, scn.export["kernel"])
-    write_sources(render_model_c(im, scn.source), outdir / MLP_DIR)
+    staged.add(render_model_c(im, scn.source), MLP_DIR)
     alt_im = quantize_kernel(model, ds, other_kernel(im.kernel))
-    write_sources(render_model_c(alt_im, scn.source), outdir / MLP_DIR / alt_im.kernel)
+    staged.add(render_model_c(alt_im, scn.source), Path(MLP_DIR) / alt_im.kernel)
     in_um = np.rint(ds.p["test"] * 1000).astype(np.int64)
     truth = _truth_for_um(scn, in_um, ds.q["test"])
-    baselines = _export_baselines(scn, im, ds, outdir / C_DIR, in_um, truth)
+    baselines = _export_baselines(scn, im, ds, staged, in_um, truth)
     total, delivered, _ = im.run(in_um)
     pre = total / float(2**im.out.F)
     stats = error_stats(pre, truth)
@@ -181,6 +184,7 @@ def export(outdir: Path):
     if not all(r["within_bound"] for r in ranges):
         raise NnikError("range analysis failed: a tensor exceeded its proven bound", str(outdir))
     tanh_stats = im.tanh_summary()
+    staged.commit()
     write_metrics(outdir, {
         "fixed": {**stats, "delivered_max_abs": np.abs(delivered - truth).max(0).tolist(),
                   "delivered_rms": np.sqrt(((delivered - truth) ** 2).mean(0)).tolist(),
@@ -200,21 +204,20 @@ def mlp_flash_bytes(im) -> int:
     return im.weights_bytes() + im.tanh_bytes()
 
 
-def _export_baselines(scn, im, ds, c_dir: Path, in_um: np.ndarray, truth: np.ndarray) -> dict:
-    """Write NAME_float.{h,c} (where a closed form exists) and NAME_lut.{h,c}; their accuracy."""
+def _export_baselines(scn, im, ds, staged, in_um: np.ndarray, truth: np.ndarray) -> dict:
+    """Stage c/NAME_float.{h,c} (where a closed form exists) and c/NAME_lut.{h,c}; their accuracy."""
     from nnik import baselines as bl
-    from nnik.emit.export import write_sources
 
     out: dict = {}
     reason = bl.float_unavailable_reason(scn)
     if reason is None:
-        write_sources(bl.render_float_c(scn), c_dir)
+        staged.add(bl.render_float_c(scn), C_DIR)
         out["float"] = {"available": True, "file": f"{scn.name}_float.c"}
     else:
         out["float"] = {"available": False, "reason": reason}
     budget = scn.export["lut_bytes"] or mlp_flash_bytes(im)
     lut = bl.build_lut(scn, budget, ds.p["train"], ds.q["train"])
-    write_sources(bl.render_lut_c(lut), c_dir)
+    staged.add(bl.render_lut_c(lut), C_DIR)
     acc = bl.lut_accuracy(lut, in_um, truth)
     out["lut"] = {"available": True, "file": f"{scn.name}_lut.c", "budget_bytes": int(budget),
                   "flash_bytes": int(lut.flash_bytes), "grid": acc["grid"], "origin": lut.origin,

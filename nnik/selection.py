@@ -9,7 +9,6 @@ each family's best (the pick's family included), all with the same API ``NAME_ik
 
 from __future__ import annotations
 
-import shutil
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -141,21 +140,20 @@ def no_pick_reason(cands: list[Candidate], bests: dict[str, Candidate], target: 
 
 
 def write_choice(c_dir: Path, bests: dict[str, Candidate], pick: Candidate | None) -> None:
-    """c/alt/<family>/ for every family's best, c/NAME.{c,h} for the pick (fresh files)."""
-    from nnik.emit.export import write_sources
+    """c/alt/<family>/ for every family's best, c/NAME.{c,h} for the pick, all at once (stale
+    files of a family's folder are removed first)."""
+    from nnik.atomic_write import Staged
 
-    alt = c_dir / ALT_DIR
+    staged = Staged(c_dir)
     for fam, c in bests.items():
-        d = alt / fam
-        if d.exists():
-            for f in d.iterdir():
-                if f.is_file():
-                    f.unlink()
-        write_sources(c.impl.render_c(), d)
+        staged.add(c.impl.render_c(), Path(ALT_DIR) / fam)
     if pick is not None:
-        for fname, text in pick.impl.render_c().items():
-            (c_dir / fname).write_text(text)
-        src = alt / pick.family
-        for f in src.iterdir():
-            if f.suffix == ".h" and f.name.startswith("nnik_"):
-                shutil.copy(f, c_dir / f.name)
+        staged.add(pick.impl.render_c(), ".")
+    alt = c_dir / ALT_DIR
+    for fam in bests:
+        d = alt / fam
+        if d.is_dir():
+            for f in d.iterdir():
+                if f.is_file() and Path(ALT_DIR) / fam / f.name not in staged.files:
+                    f.unlink()
+    staged.commit()

@@ -1,0 +1,46 @@
+"""Generated files land all at once or not at all: a stage collects its files, and only when it
+has everything does :meth:`Staged.commit` write them to a temporary folder beside the output
+and move each into place (``os.replace``, atomic per file). A stage that fails before the
+commit leaves the output directory exactly as it was."""
+
+from __future__ import annotations
+
+import os
+import shutil
+import tempfile
+from pathlib import Path
+
+
+class Staged:
+    def __init__(self, root: Path):
+        self.root = Path(root)
+        self.files: dict[Path, bytes] = {}  # relative path -> content
+
+    def add(self, files: dict[str, str], subdir: str | Path = ".", runtime_headers: bool = True) -> None:
+        """Generated sources for root/subdir, plus the runtime headers they include."""
+        from nnik.emit.export import RUNTIME, RUNTIME_HEADERS
+
+        d = Path(subdir)
+        for name, text in files.items():
+            self.files[d / name] = text.encode()
+        if runtime_headers:
+            for h in RUNTIME_HEADERS:
+                self.files[d / h] = (RUNTIME / h).read_bytes()
+
+    def commit(self) -> list[Path]:
+        self.root.mkdir(parents=True, exist_ok=True)
+        tmp = Path(tempfile.mkdtemp(prefix=".staging-", dir=self.root))
+        try:
+            for rel, data in self.files.items():
+                p = tmp / rel
+                p.parent.mkdir(parents=True, exist_ok=True)
+                p.write_bytes(data)
+            out = []
+            for rel in self.files:
+                dest = self.root / rel
+                dest.parent.mkdir(parents=True, exist_ok=True)
+                os.replace(tmp / rel, dest)
+                out.append(dest)
+            return out
+        finally:
+            shutil.rmtree(tmp, ignore_errors=True)
