@@ -96,11 +96,14 @@ def run_job(outdir: Path, job_path: Path, seg_um: int | None = None, use_chip: b
         run = c.pop("run")
         same = ev.shape == events.shape and bool((ev == events).all())
         busy = (run.busy[:, 1] - run.busy[:, 0]).astype(np.float64)
-        c.update({"steps": int(len(ev)), "steps_equal": same, "replies_equal": c["replies"] == plan.replies,
-                  "cycles_per_segment": {"mean": float(busy.mean()), "max": int(busy.max()), "n": int(len(busy))}
-                  if len(busy) else None})
-        if len(busy):
-            c["segment_rate_hz"] = {"mean": CPU_SHARE * CLOCK_HZ / busy.mean(), "worst": CPU_SHARE * CLOCK_HZ / busy.max()}
+        c.update({"steps": int(len(ev)), "steps_equal": same, "replies_equal": c["replies"] == plan.replies})
+        if len(busy) and res["segments"]:
+            # the sketch's busy pin is high while it parses, segments and runs the IK (interrupts
+            # that fall inside included), low while it waits: busy cycles per segment, amortised,
+            # and the longest stretch between two waits (one segment, with its line's parsing)
+            mean = float(busy.sum()) / res["segments"]
+            c["cycles_per_segment"] = {"mean": mean, "max": int(busy.max()), "windows": int(len(busy))}
+            c["segment_rate_hz"] = {"mean": CPU_SHARE * CLOCK_HZ / mean}
         res["chip"] = c
     out = outdir / JOB_DIR
     out.mkdir(parents=True, exist_ok=True)

@@ -18,10 +18,10 @@ def job_row(r: dict) -> tuple[str, ...]:
         chip = (f"not run ({c['not_run']})", "-", "-", "-")
     else:
         same = "equal" if c["steps_equal"] and c["replies_equal"] else "DIFFER"
-        cps = c["cycles_per_segment"]
+        cps = c.get("cycles_per_segment")
         rate = c.get("segment_rate_hz")
-        chip = (f"{c['steps']} {same}", f"{cps['mean']:.0f} (max {cps['max']})" if cps else "-",
-                f"{rate['mean']:.0f} (worst {rate['worst']:.0f})" if rate else "-",
+        chip = (f"{c['steps']} {same}", f"{cps['mean']:.0f} (longest stretch {cps['max']})" if cps else "-",
+                f"{rate['mean']:.0f}" if rate else "-",
                 f"{c['flash_bytes']} / {c['ram_bytes']}")
     return (r["scenario"], r["job"], str(r["segments"]), str(r["steps"]), _um(r["contour_um"], True), _um(r["ik_um"]),
             _um(r.get("rounding_um")), _um(r.get("chord_um")), *chip)

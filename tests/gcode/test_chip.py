@@ -1,18 +1,26 @@
 """The library on the simulated Uno: Arduino AVR core + simavr. The self-test passes, the G-code
-firmware fits, and every step it emits for each shipped job equals the Python model's."""
+firmware fits, and every step it emits for each shipped job equals the Python model's.
+
+To keep the simulated time short, the step comparisons run the shipped jobs at four times their
+feed (the same paths; `nnik job` runs them as shipped); one job runs as shipped end to end."""
 
 from __future__ import annotations
 
 import os
+import re
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from nnik import pipeline
 from nnik.arduino_export import export_arduino
 from nnik.gcode import chip
-from nnik.gcode.job import run_job
-from nnik.gcode.motion import interpret
+from nnik.gcode.job import CLOCK_HZ, run_job
+from nnik.gcode.motion import interpret, plan_steps
+from nnik.gcode.oracle import ik_oracle
+from nnik.gcode.parse import split_lines
+from nnik.gcode.steps import chip_events, model_events
 from tests.conftest import require_tool
 
 JOBS = Path(__file__).resolve().parents[2] / "datasets" / "jobs"
@@ -30,35 +38,59 @@ def toolchain():
 
 
 @pytest.fixture(scope="module")
-def models(galvo_run, corexy_run):
-    for out in (galvo_run, corexy_run):
-        pipeline.export(out)
-    return {"galvo_cba2012": galvo_run, "corexy_nonlinear": corexy_run}
+def firmware(galvo_run, corexy_run, tmp_path_factory):
+    """Per scenario: (model dir, library info, the built G-code firmware, the IK oracle)."""
+    out = {}
+    for name, run in (("galvo_cba2012", galvo_run), ("corexy_nonlinear", corexy_run)):
+        pipeline.export(run)
+        work = tmp_path_factory.mktemp(name)
+        lib = export_arduino(run, work / "lib")
+        fw = chip.build_sketch(work / "lib", f"{name}_gcode", work / "build")
+        out[name] = (run, lib, fw, ik_oracle(run), work / "build")
+    return out
+
+
+def faster(lines: list[str], k: int = 4) -> list[str]:
+    return [re.sub(r"F(\d+)", lambda m: f"F{int(m.group(1)) * k}", ln) for ln in lines]
 
 
 @pytest.mark.parametrize("scenario", ["galvo_cba2012", "corexy_nonlinear"])
 @pytest.mark.parametrize("job", ["l_path", "circle", "star"])
-def test_every_step_of_every_job_matches(models, scenario, job):
-    res = run_job(models[scenario], JOBS / f"{job}.gcode", use_chip=True)
+def test_every_step_of_every_job_matches(firmware, scenario, job):
+    run, lib, fw, ik, work = firmware[scenario]
+    lines = faster(split_lines((JOBS / f"{job}.gcode").read_bytes()))
+    cfg = lib["machine"]
+    plan = interpret(lines, cfg)
+    seg = plan_steps(plan, cfg, ik)
+    want = model_events(seg)
+    res = chip.run_firmware(fw, lines, work, 2.0 + 1.5 * seg.ticks.sum() / cfg.tick_hz)
+    assert res.state == "done"
+    assert [t for _, t in res.replies[1:]] == plan.replies == ["ok"] * len(lines)
+    assert len(res.marks) == len(seg.ticks)
+    got = chip_events(res.steps, res.marks, CLOCK_HZ // cfg.tick_hz)
+    assert len(want) > 20 and got.shape == want.shape
+    assert np.array_equal(got, want)
+    assert fw.flash_bytes <= chip.FLASH_BYTES and fw.ram_bytes <= chip.RAM_BYTES - 512  # stack room
+
+
+def test_shipped_job_end_to_end_with_selftest_rate_and_plot(firmware):
+    run = firmware["corexy_nonlinear"][0]
+    res = run_job(run, JOBS / "l_path.gcode", use_chip=True)
     c = res["chip"]
     assert c["selftest_pass"], c["selftest"]
-    assert c["state"] == "done"
-    assert c["steps_equal"] and c["steps"] == res["steps"] > 0
-    assert c["replies_equal"] and set(c["replies"]) == {"ok"}
-    assert c["segments_started"] == res["segments"]
-    assert c["flash_bytes"] <= chip.FLASH_BYTES and c["ram_bytes"] <= chip.RAM_BYTES - 512  # stack room
-    assert 0 < c["cycles_per_segment"]["mean"] <= c["cycles_per_segment"]["max"] < 20000
+    assert c["steps_equal"] and c["replies_equal"] and c["steps"] == res["steps"] == 3200
+    cps = c["cycles_per_segment"]
+    assert 2000 < cps["mean"] <= cps["max"] < 100_000
+    assert c["segment_rate_hz"]["mean"] == pytest.approx(0.5 * CLOCK_HZ / cps["mean"])
     assert Path(res["png"]).stat().st_size > 10_000
     assert res["contour_um"]["max"] >= res["chord_um"]["max"]
 
 
-def test_bad_lines_get_the_same_error_on_the_chip(models, tmp_path):
-    out = models["corexy_nonlinear"]
+def test_bad_lines_get_the_same_error_on_the_chip(firmware):
+    run, lib, fw, _, work = firmware["corexy_nonlinear"]
     lines = ["G1 X1 F3000", "G1 Z2", "G2 X5 Y5 I1", "G1 X" + "1" * 100, "G7", "G1 X1.1234567", "G1 Y1", "M400"]
-    lib = export_arduino(out, tmp_path / "lib")
-    fw = chip.build_sketch(tmp_path / "lib", f"{lib['name']}_gcode", tmp_path / "build")
-    run = chip.run_firmware(fw, lines, tmp_path / "build", 5.0)
-    got = [t for _, t in run.replies if not t.startswith("nnik ")]
+    res = chip.run_firmware(fw, lines, work, 5.0)
+    got = [t for _, t in res.replies if not t.startswith("nnik ")]
     want = interpret(lines, lib["machine"]).replies
     assert got == want
     assert want[1] == "error: line 2: unsupported word Z" and want[3] == "error: line 4: line too long"

@@ -104,7 +104,7 @@ uint32_t nnik_isqrt64(uint64_t v)
     return (uint32_t)r;
 }
 
-void nnik_gc_init(nnik_gc_t *g, nnik_gc_emit_fn emit, nnik_gc_busy_fn busy)
+void nnik_gc_init(nnik_gc_t *g, nnik_gc_emit_fn emit)
 {
     int32_t in[2];
     in[0] = NNIK_GC_ORIGIN_X_UM;
@@ -119,7 +119,6 @@ void nnik_gc_init(nnik_gc_t *g, nnik_gc_emit_fn emit, nnik_gc_busy_fn busy)
     g->inch = 0;
     g->relative = 0;
     g->emit = emit;
-    g->busy = busy;
     g->msg[0] = 0;
 }
 
@@ -137,8 +136,6 @@ static void seg_to(nnik_gc_t *g, int32_t x, int32_t y, int32_t feed)
 {
     int32_t in[2], out[2], d[2], dx, dy;
     uint32_t len, ticks, a;
-    if (g->busy)
-        g->busy(1);
     dx = x - g->pos[0];
     dy = y - g->pos[1];
     len = nnik_isqrt32((uint32_t)(dx * dx) + (uint32_t)(dy * dy));
@@ -162,8 +159,6 @@ static void seg_to(nnik_gc_t *g, int32_t x, int32_t y, int32_t feed)
     g->steps[0] = out[0];
     g->steps[1] = out[1];
     g->segments++;
-    if (g->busy)
-        g->busy(0);
     g->emit(g, d, ticks);
 }
 
@@ -213,14 +208,35 @@ static void line_to(nnik_gc_t *g, int32_t x, int32_t y, int32_t feed)
 static int32_t div_round(int64_t a, uint32_t b)
 {
     uint64_t u = a < 0 ? (uint64_t)(-a) : (uint64_t)a;
-    int32_t q = (int32_t)((2 * u + b) / (2 * (uint64_t)b));
+    int32_t q;
+    if (u < 0x40000000UL && b < 0x40000000UL) /* the same value by 32-bit division: far cheaper on AVR */
+        q = (int32_t)((2 * (uint32_t)u + b) / (2 * b));
+    else
+        q = (int32_t)((2 * u + b) / (2 * (uint64_t)b));
     return a < 0 ? -q : q;
 }
 
-static int64_t chord2(const int32_t a[2], const int32_t b[2])
+/* x^2 + y^2; with 16-bit operands in 32-bit arithmetic (the same value, far cheaper on AVR) */
+static uint64_t sq2(int32_t x, int32_t y)
 {
-    int64_t dx = (int64_t)b[0] - a[0], dy = (int64_t)b[1] - a[1];
-    return dx * dx + dy * dy;
+    if (x > -32768L && x < 32768L && y > -32768L && y < 32768L)
+        return (uint32_t)(x * x) + (uint32_t)(y * y);
+    return (uint64_t)((int64_t)x * x) + (uint64_t)((int64_t)y * y);
+}
+
+/* x * r, r >= 0, likewise */
+static int64_t mul_r(int32_t x, uint32_t r)
+{
+    if (x > -65536L && x < 65536L && r < 65536UL) {
+        uint32_t p = (uint32_t)(x < 0 ? -x : x) * r;
+        return x < 0 ? -(int64_t)p : (int64_t)p;
+    }
+    return (int64_t)x * (int64_t)r;
+}
+
+static uint64_t chord2(const int32_t a[2], const int32_t b[2])
+{
+    return sq2(b[0] - a[0], b[1] - a[1]);
 }
 
 /* Bisect the arc cur -> end (vectors from the centre, at most a quarter turn) until every
@@ -230,7 +246,7 @@ static void arc_piece(nnik_gc_t *g, const int32_t c[2], int32_t cur[2], const in
 {
     static int32_t stack[ARC_STACK][2];
     uint8_t top = 0;
-    const int64_t seg2 = (int64_t)NNIK_GC_SEG_UM * NNIK_GC_SEG_UM;
+    const uint64_t seg2 = (uint64_t)NNIK_GC_SEG_UM * NNIK_GC_SEG_UM;
     stack[0][0] = end[0];
     stack[0][1] = end[1];
     top = 1;
@@ -243,9 +259,9 @@ static void arc_piece(nnik_gc_t *g, const int32_t c[2], int32_t cur[2], const in
             seg_to(g, c[0] + cur[0], c[1] + cur[1], feed);
         } else {
             int32_t mx = cur[0] + b[0], my = cur[1] + b[1];
-            uint32_t m = nnik_isqrt64((uint64_t)((int64_t)mx * mx) + (uint64_t)((int64_t)my * my));
-            stack[top][0] = div_round((int64_t)mx * r, m);
-            stack[top][1] = div_round((int64_t)my * r, m);
+            uint32_t m = nnik_isqrt64(sq2(mx, my));
+            stack[top][0] = div_round(mul_r(mx, r), m);
+            stack[top][1] = div_round(mul_r(my, r), m);
             top++;
         }
     }

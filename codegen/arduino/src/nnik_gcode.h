@@ -30,7 +30,6 @@ extern "C" {
 
 typedef struct nnik_gc nnik_gc_t;
 typedef void (*nnik_gc_emit_fn)(nnik_gc_t *g, const int32_t steps[2], uint32_t ticks);
-typedef void (*nnik_gc_busy_fn)(uint8_t on);
 
 struct nnik_gc {
     int32_t pos[2];      /* program position, um */
@@ -42,13 +41,12 @@ struct nnik_gc {
     uint8_t motion;      /* 0..3 */
     uint8_t inch;
     uint8_t relative;
-    nnik_gc_emit_fn emit;
-    nnik_gc_busy_fn busy; /* optional: on while a segment is computed (timing pin) */
+    nnik_gc_emit_fn emit; /* takes one segment; may wait for room in the caller's queue */
     char msg[40];         /* the last error, without "error: line N: " */
 };
 
 /* Start at program position (0, 0) = the work origin; the motors are taken to be there. */
-void nnik_gc_init(nnik_gc_t *g, nnik_gc_emit_fn emit, nnik_gc_busy_fn busy);
+void nnik_gc_init(nnik_gc_t *g, nnik_gc_emit_fn emit);
 
 /* Run one line (without its newline).  0: done; 1: done, wait until the motion has finished
  * before answering (M2/M30/M400); -1: error, nothing moved, g->msg says why. */

@@ -19,7 +19,7 @@ int main(void)
 {
     static nnik_gc_t gc;
     char line[4096];
-    nnik_gc_init(&gc, emit, NULL);
+    nnik_gc_init(&gc, emit);
     printf("I %ld %ld\n", (long)gc.steps[0], (long)gc.steps[1]);
     while (fgets(line, sizeof line, stdin)) {
         size_t n = strlen(line);
