@@ -19,7 +19,7 @@ import numpy as np
 
 from nnik.errors import NnikError
 from nnik.implementations.c_common import i32
-from nnik.implementations.lut import LutImpl, fit_points, k_for_nodes
+from nnik.implementations.lut import LutImpl, cell_ladder, fit_points
 from nnik.implementations.lut_table import Grid, Table, fit_nodes, quantise
 from nnik.implementations.problem import Problem
 
@@ -47,11 +47,14 @@ class HybridImpl(LutImpl):
 
     @classmethod
     def ladder(cls, problem: Problem) -> list[dict]:
+        """Residual tables with cells halving from about 4 to at most 40 nodes per axis: an
+        8-bit cell fraction (fastest) and Q16 (minimax nodes up to 14 per axis)."""
         span = [int(problem.hi[a] - problem.lo[a]) for a in range(2)]
         out = []
-        for nodes in (5, 8, 12, 17, 24, 33):
-            out.append({"k": [k_for_nodes(span[a], nodes) for a in range(2)], "bits": 16, "W": 16, "fit": "lsq",
-                        "base": "affine"})
+        for k in cell_ladder(span):
+            small = max((span[a] >> k[a]) + 2 for a in range(2)) <= 14
+            out += [{"k": k, "bits": 16, "W": 8, "fit": "lsq", "base": "affine"},
+                    {"k": k, "bits": 16, "W": 16, "fit": "minimax" if small else "lsq", "base": "affine"}]
         return out
 
     @classmethod
@@ -155,7 +158,7 @@ class HybridImpl(LutImpl):
     def render_source(self) -> str:
         from nnik.emit.templating import environment
         from nnik.implementations import hybrid_asm, lut_avr, lut_p18
-        from nnik.implementations.lut import table_ctx
+        from nnik.implementations.lut_c import table_ctx
         from nnik.implementations.c_common import comment_safe
 
         p = self.problem

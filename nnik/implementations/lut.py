@@ -19,21 +19,12 @@ import numpy as np
 
 from nnik.errors import NnikError
 from nnik.implementations.base import Implementation, IntRun
-from nnik.implementations.c_common import c_list, comment_safe, i32
-from nnik.implementations.lut_table import Grid, Table, detect_parity, fit_nodes, quantise
+from nnik.implementations.c_common import comment_safe, i32
+from nnik.implementations.lut_c import table_ctx
+from nnik.implementations.lut_table import Grid, Table, fit_nodes, fold_plan, quantise
 from nnik.implementations.problem import Problem
 
 DEFAULTS = {"bits": 16, "W": 16, "fit": "lsq", "symmetry": True}
-
-
-def fold_plan(problem: Problem, symmetry: bool) -> tuple[tuple[bool, bool], np.ndarray]:
-    """(fold per axis, odd[o, a]): an axis is folded when every output is even or odd in it."""
-    par = problem.cache.get("lut_parity")
-    if par is None:
-        par = problem.cache["lut_parity"] = detect_parity(problem)
-    fold = tuple(bool(symmetry) and all(par[o][a] is not None for o in range(2)) for a in range(2))
-    odd = np.array([[fold[a] and par[o][a] == "odd" for a in range(2)] for o in range(2)])
-    return fold, odd
 
 
 def fit_points(problem: Problem, grid: Grid) -> tuple[np.ndarray, np.ndarray]:
@@ -83,17 +74,17 @@ def k_for_nodes(span: int, nodes: int) -> int:
     return max(0, int(math.ceil(math.log2(max(1.0, span / max(1, nodes - 1))))))
 
 
-def table_ctx(problem: Problem, tab: Table) -> dict:
-    """What the C template needs about the table."""
-    rows = []
-    n0, n1 = tab.grid.n
-    for o in range(2):
-        rows.append(c_list(tab.ent[o].ravel(), per_line=n0 if n0 <= 16 else 16))
-    flipmask = [sum(1 << o for o in range(2) if tab.odd[o, a]) for a in range(2)]
-    return {"tab": tab, "rows": rows, "ctype": f"int{tab.bits}_t",
-            "rd": "NNIK_RD_I16" if tab.bits == 16 else "NNIK_RD_I32", "flipmask": flipmask,
-            "origin": [i32(v) for v in tab.grid.origin],
-            "oddtxt": [" and ".join(v for a, v in enumerate("xy") if tab.odd[o, a]) for o in range(2)]}
+def cell_ladder(span: list[int], first_nodes: int = 4, max_nodes: int = 40) -> list[list[int]]:
+    """Cell exponents per axis, halving the cells from about `first_nodes` nodes per axis while
+    no axis exceeds `max_nodes` nodes."""
+    k0 = [k_for_nodes(s, first_nodes) for s in span]
+    out = []
+    for step in range(12):
+        k = [max(0, k0[a] - step) for a in range(2)]
+        if max((span[a] >> k[a]) + 2 for a in range(2)) > max_nodes:
+            break
+        out.append(k)
+    return out
 
 
 class LutImpl(Implementation):
@@ -107,13 +98,17 @@ class LutImpl(Implementation):
     # ---- fitting -------------------------------------------------------------------------------
     @classmethod
     def ladder(cls, problem: Problem) -> list[dict]:
+        """Cells halving from about 4 nodes per stored axis up to 40 nodes; per size an int16
+        table with an 8-bit cell fraction (fastest), a Q16 int16 table (minimax nodes up to 14
+        per axis) and a Q16 int32 table (wide outputs, DACs)."""
         fold, _ = fold_plan(problem, True)
         span = [int(problem.hi[a]) if fold[a] else int(problem.hi[a] - problem.lo[a]) for a in range(2)]
         out = []
-        for nodes in (6, 9, 14, 20, 28, 40):
-            k = [k_for_nodes(span[a], nodes) for a in range(2)]
-            for bits in (16, 32):
-                out.append({"k": k, "bits": bits, "W": 16, "fit": "lsq", "symmetry": True})
+        for k in cell_ladder(span):
+            small = max((span[a] >> k[a]) + 2 for a in range(2)) <= 14
+            out += [{"k": k, "bits": 16, "W": 8, "fit": "lsq", "symmetry": True},
+                    {"k": k, "bits": 16, "W": 16, "fit": "minimax" if small else "lsq", "symmetry": True},
+                    {"k": k, "bits": 32, "W": 16, "fit": "lsq", "symmetry": True}]
         return out
 
     @classmethod

@@ -10,6 +10,8 @@ Cycle counts in the comments are for the straight-line path.
 
 from __future__ import annotations
 
+import re
+
 A = ("r18", "r19", "r20", "r21")
 U = ("r22", "r23")
 D = ("r16", "r17")
@@ -82,7 +84,7 @@ def input_stage(impl, flipmask, after_clamp=None) -> list[str]:
     fy in r4(:r5). after_clamp(a) -> lines run with t = x - lo in r20:r19:r18."""
     p = impl.problem
     g = impl.table.grid
-    code = ["clr " + ZERO, "clr " + NEG, "clt"]
+    code = ["clr " + ZERO, "clt"] + (["clr " + NEG] if any(flipmask) else [])
     for a in range(2):
         lo, hi = int(p.lo[a]), int(p.hi[a])
         code.append(f"nnik_inw {', '.join(A)}, {lo}, {hi - lo}, {U[0]}")
@@ -178,12 +180,22 @@ def finish(o: int, shift: int, offset: int, code_range) -> list[str]:
     return code
 
 
-CLOBBERS = ["r0"] + [f"r{i}" for i in range(2, 24)] + ["r25", "memory"]
+def clobbers(lines: list[str]) -> list[str]:
+    """The registers the assembly writes or reads (r24 is the flag operand, r26-r31 X and Z
+    operands, r1 is restored): gcc saves and restores the call-saved ones among them."""
+    used = {int(r) for ln in lines for r in re.findall(r"\br(\d+)\b", ln)}
+    regs = sorted(r for r in used if r not in (1, 24) and r < 26)
+    return [f"r{r}" for r in regs] + ["memory"]
+
+
+def saved_registers(lines: list[str]) -> int:
+    """Call-saved registers (r2-r17) the prologue pushes and the epilogue pops."""
+    return sum(1 for r in clobbers(lines) if r != "memory" and 2 <= int(r[1:]) <= 17)
 
 
 def wrap(lines: list[str], tabsym: str) -> str:
     asm = "\n".join(f'        "{ln}\\n"' for ln in lines)
-    clob = ", ".join(f'"{c}"' for c in CLOBBERS)
+    clob = ", ".join(f'"{c}"' for c in clobbers(lines))
     return "\n".join([
         '    register int8_t flag __asm__("r24");',
         "    const int32_t *pin = in_um;",

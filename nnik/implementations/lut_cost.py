@@ -52,7 +52,10 @@ def avr_static(lines: list[str]) -> tuple[float, int]:
         c, b = AVR_MACRO.get(op, (AVR_CYC.get(op, 1), 2))
         cyc += wt * c
         nbytes += b
-    return cyc, nbytes
+    from nnik.implementations.lut_avr import saved_registers
+
+    n = saved_registers(lines)  # push + pop in gcc's prologue and epilogue
+    return cyc + 4 * n, nbytes + 4 * n
 
 
 def p18_static(items: list) -> tuple[float, int]:
@@ -76,7 +79,7 @@ def p18_static(items: list) -> tuple[float, int]:
 
 
 def static_counts(impl, target: str) -> tuple[float, int]:
-    from nnik.implementations.lut import table_ctx
+    from nnik.implementations.lut_c import table_ctx
 
     ctx = table_ctx(impl.problem, impl.table)
     if target == "avr":
@@ -95,12 +98,12 @@ def load(family: str) -> dict | None:
 
 
 @lru_cache(maxsize=None)
-def calibration_current(family: str) -> bool:
+def calibration_current(cls) -> bool:
     """True if the stored calibration's key is the hash of today's reference C."""
-    from nnik.implementations.lut_calibrate import reference_hash
+    from nnik.implementations.lut_reference import reference_hash
 
-    cal = load(family)
-    return cal is not None and cal.get("key") == reference_hash(family)
+    cal = load(cls.family)
+    return cal is not None and cal.get("key") == reference_hash(cls)
 
 
 def estimate(impl, target: str) -> dict:
@@ -110,7 +113,7 @@ def estimate(impl, target: str) -> dict:
     if cal is None or target not in cal["targets"]:
         return {"cycles": cyc, "flash_bytes": int(code + impl.model_bytes()), "ram_bytes": ram, "validated": False}
     c = cal["targets"][target]
-    ok = bool(c["validated"]) and calibration_current(impl.family)
+    ok = bool(c["validated"]) and calibration_current(type(impl))
     return {"cycles": float(c["cycles"][0] + c["cycles"][1] * cyc),
             "flash_bytes": int(round(c["flash"][0] + c["flash"][1] * code)) + impl.model_bytes(),
             "ram_bytes": int(c.get("ram", ram)), "validated": ok}

@@ -62,6 +62,17 @@ def detect_parity(problem, n: int = 4000, seed: int = 7) -> list[list[str | None
     return res
 
 
+def fold_plan(problem, symmetry: bool) -> tuple[tuple[bool, bool], np.ndarray]:
+    """(fold per axis, odd[o, a]): an axis is folded when every output is even or odd in it."""
+    par = problem.cache.get("lut_parity")
+    if par is None:
+        par = problem.cache["lut_parity"] = detect_parity(problem)
+    fold = tuple(bool(symmetry) and all(par[o][a] is not None for o in range(2)) for a in range(2))
+    odd = np.array([[fold[a] and par[o][a] == "odd" for a in range(2)] for o in range(2)])
+    return fold, odd
+
+
+
 @dataclass
 class Grid:
     """Index map per axis: origin, span (max t), cell exponent k, nodes n, folded or not."""
