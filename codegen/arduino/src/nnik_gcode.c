@@ -68,40 +68,34 @@ static int8_t fail(nnik_gc_t *g, const char *tmpl, char ch, int32_t num)
     return -1;
 }
 
+/* floor(sqrt(v)) bit by bit, in the width of T (one body for both widths) */
+#define NNIK_ISQRT_BODY(T, v)                                                                   \
+    T r = 0, b = (T)1 << (sizeof(T) * 8 - 2);                                                   \
+    while (b > v)                                                                               \
+        b >>= 2;                                                                                \
+    while (b) {                                                                                 \
+        if (v >= r + b) {                                                                       \
+            v -= r + b;                                                                         \
+            r = (r >> 1) + b;                                                                   \
+        } else {                                                                                \
+            r >>= 1;                                                                            \
+        }                                                                                       \
+        b >>= 2;                                                                                \
+    }                                                                                           \
+    return (uint32_t)r
+
 uint32_t nnik_isqrt32(uint32_t v)
 {
-    uint32_t r = 0, b = 1UL << 30;
-    while (b > v)
-        b >>= 2;
-    while (b) {
-        if (v >= r + b) {
-            v -= r + b;
-            r = (r >> 1) + b;
-        } else {
-            r >>= 1;
-        }
-        b >>= 2;
-    }
-    return r;
+    NNIK_ISQRT_BODY(uint32_t, v);
 }
 
 uint32_t nnik_isqrt64(uint64_t v)
 {
-    uint64_t r = 0, b = 1ULL << 62;
     if (v < 0x100000000ULL)
-        return nnik_isqrt32((uint32_t)v);
-    while (b > v)
-        b >>= 2;
-    while (b) {
-        if (v >= r + b) {
-            v -= r + b;
-            r = (r >> 1) + b;
-        } else {
-            r >>= 1;
-        }
-        b >>= 2;
+        return nnik_isqrt32((uint32_t)v); /* 32-bit arithmetic: far cheaper on AVR */
+    {
+        NNIK_ISQRT_BODY(uint64_t, v);
     }
-    return (uint32_t)r;
 }
 
 void nnik_gc_init(nnik_gc_t *g, nnik_gc_emit_fn emit)
