@@ -28,7 +28,9 @@ from nnik.implementations.base import Implementation, IntRun
 from nnik.implementations.problem import Problem
 from nnik.implementations import poly_fit, poly_int
 
-DEFAULTS = {"degree": 5, "fit": "best", "coef_bits": 16, "split": False, "trim": 4, "rounding": True}
+DEFAULTS = {"degree": 5, "fit": "best", "coef_bits": 16, "split": False, "trim": 4, "rounding": True, "lsb": False}
+CONST_TOL = 1e-3  # output units: a final constant multiplier rounded worse than this gets a low part
+NEGLIGIBLE = 1e-6  # output units: a term smaller than this over the domain is dropped
 KNOBS = set(DEFAULTS) | {"degree_x", "degree_y", "guard"}
 MAX_LOWER = 12  # rounds of "lower the failing value's exponent" before giving up
 RANGE_GRID = 257
@@ -62,21 +64,25 @@ class PolyImpl(Implementation):
 
     @classmethod
     def ladder(cls, problem: Problem) -> list[dict]:
-        """Total degree 2..7; per degree no split, then the split of each output that has an odd
-        factor (u or v), then of both; each without and with rounding in the steps (floor is 3 cycles
-        a step cheaper on AVR); the fit chosen per output ("best")."""
+        """Total degree 1..7 (a degree whose symmetric term sets equal the previous one's is
+        skipped); per degree, without and with the dropped-input-bits correction (when an input
+        shift drops bits); no split, the split of each output, of both; the split variants also
+        with floor steps (3 AVR cycles a step cheaper). The fit is chosen per output ("best")."""
         sym = _symmetry(problem)
-        odd = [any(all(c[a] == 1 for c in s.classes) for a in range(2)) for s in sym]
-        splits = [False]
-        if odd[0] and odd[1]:
-            splits += [[True, False], [False, True], True]
-        elif odd[0] or odd[1]:
-            splits += [[odd[0], odd[1]]]
-        out = []
-        for d in range(2, 8):
-            for sp in splits:
-                out += [{"degree": d, "fit": "best", "coef_bits": 16, "split": sp, "trim": 4, "rounding": r}
-                        for r in ((False, True) if d >= 4 else (True,))]
+        maps = poly_fit.axis_maps(problem)
+        lsbs = (False, True) if any(m.k > 0 for m in maps) else (False,)
+        splits = [False, [True, False], [False, True], True]
+        out, seen = [], set()
+        for d in range(1, 8):
+            terms = tuple(tuple(poly_fit.monomials(s, d)) for s in sym)
+            if terms in seen:
+                continue
+            seen.add(terms)
+            for lsb in lsbs:
+                for sp in splits:
+                    for r in ((True,) if sp is False else (True, False)):
+                        out.append({"degree": d, "fit": "best", "coef_bits": 16, "split": sp, "trim": 4,
+                                    "rounding": r, "lsb": lsb})
         return out
 
     @classmethod
@@ -109,15 +115,23 @@ class PolyImpl(Implementation):
             hows = [min(("minimax", "lsq"), key=lambda h: err[h][o]) if hows[o] == "best" else hows[o]
                     for o in range(2)]
         self.fits = hows
-        t, q = poly_fit.fit_data(problem)
-        self.coefs = []
+        t, q, delta = poly_fit.fit_data(problem)
+        self.coefs, self.lsb = [], []
         for o in range(2):
             terms = poly_fit.monomials(self.sym[o], deg, cfg.get("degree_x"), cfg.get("degree_y"))
-            key = ("poly_coefs", o, tuple(terms), hows[o])
+            # the dropped input bits enter linearly, for each axis the output depends on
+            axes = [a for a in range(2) if cfg["lsb"] and self.maps[a].k > 0 and
+                    not (self.sym[o].indep_x if a == 0 else self.sym[o].indep_y)]
+            key = ("poly_coefs", o, tuple(terms), hows[o], tuple(axes))
             if key not in problem.cache:
-                problem.cache[key] = poly_fit.fit_poly(t, q[:, o], terms, hows[o])
+                problem.cache[key] = poly_fit.fit_poly(t, q[:, o], terms, hows[o],
+                                                       delta[:, axes] if axes else None)
             c = problem.cache[key]
-            self.coefs.append((float(c[0]), {ij: float(v) for ij, v in zip(terms, c[1:]) if v != 0.0}))
+            tmax = np.abs(t).max(0)
+            keep = {ij: float(v) for ij, v in zip(terms, c[1:1 + len(terms)])
+                    if abs(v) * tmax[0] ** ij[0] * tmax[1] ** ij[1] > NEGLIGIBLE}
+            self.coefs.append((float(c[0]), keep))
+            self.lsb.append({("rx", "ry")[a]: float(v) for a, v in zip(axes, c[1 + len(terms):])})
         self._build()
         return self
 
@@ -141,12 +155,22 @@ class PolyImpl(Implementation):
         split = split if isinstance(split, list) else [split, split]
         self.plans = [poly_int.plan_output(coefs, c00, shared, sp, env)
                       for (c00, coefs), sp in zip(self.coefs, split)]
+        for plan, lsb in zip(self.plans, self.lsb):
+            for nm, c in lsb.items():
+                plan.terms.append((poly_int.Node("in", name=nm), c))
+                plan.shape += f" + {nm}"
+        for a, nm in enumerate(("rx", "ry")):
+            k = max(self.maps[a].k, 0)
+            env[nm] = np.full(len(tx), ((1 << k) - 1) / 2.0 ** (15 + k))
+            env[f"e_{nm}"] = 15 + k
+        for plan in self.plans:
+            plan.terms = poly_int.split_constants(plan.terms, env, CONST_TOL)
         guard = self.config.get("guard")
         lower: dict = {}
         for _ in range(MAX_LOWER + 1):
             prog = poly_int.build_program(self.plans, env, self.config["coef_bits"], guard or 0, ur, lower,
                                           trim=self.config["trim"], rounding=self.config["rounding"])
-            bad = poly_int.prove(prog, ur)
+            bad = poly_int.prove(prog, ur, tuple((1 << max(m.k, 0)) - 1 for m in self.maps))
             if bad is None:
                 self.prog = prog
                 return
@@ -159,7 +183,8 @@ class PolyImpl(Implementation):
     def run(self, in_units: np.ndarray) -> IntRun:
         p = self.problem
         c, flags = p.clamp(in_units)
-        num = poly_int.evaluate(self.prog, self.maps[0].u(c[:, 0]), self.maps[1].u(c[:, 1]))
+        num = poly_int.evaluate(self.prog, self.maps[0].u(c[:, 0]), self.maps[1].u(c[:, 1]),
+                                self.maps[0].r(c[:, 0]), self.maps[1].r(c[:, 1]))
         pre = np.empty(num.shape, dtype=np.float64)
         out = np.empty(num.shape, dtype=np.int64)
         for k, o in enumerate(self.prog.outs):
@@ -201,11 +226,12 @@ class PolyImpl(Implementation):
     # ---- C and cost ----------------------------------------------------------------------------------
     def render_source(self) -> str:
         from nnik.implementations import poly_avr, poly_c
-        from nnik.implementations.c_common import comment_safe
+        from nnik.implementations.c_common import comment_safe, environment
         from nnik.implementations.poly_p18 import p18_body
-        from nnik.implementations.c_common import environment
 
         p = self.problem
+        used = poly_c.lsb_used(self.prog)
+        avr_asm = poly_avr.body(self.prog, p.code_range, p.name)
         name = p.name
         shift_text = [f">> {m.k}" if m.k > 0 else (f"<< {-m.k}" if m.k < 0 else "") for m in self.maps]
         outs = [{"label": comment_safe(p.outputs[k]), "shape": plan.shape, "offset": o.offset, "s": o.s,
@@ -214,13 +240,13 @@ class PolyImpl(Implementation):
         return environment().get_template("poly_ik.c.j2").render(
             name=name, NAME=name.upper(), scenario=comment_safe(p.scn.name), describe=comment_safe(self.describe()),
             maps=self.maps, shift_text=shift_text, symmetry=comment_safe(self.symmetry_text()), outs=outs,
-            values=poly_c.values(self.prog), input_lines=poly_c.input_lines(self.maps, p.lo, p.hi),
+            values=poly_c.values(self.prog), input_lines=poly_c.input_lines(self.maps, p.lo, p.hi, used=used),
             c_steps=poly_c.portable_steps(self.prog),
             c_out=poly_c.output_lines(self.prog, p.code_range, lambda a, b: f"(int32_t){a} * {b}"),
             avr_steps=poly_c.avr_steps(self.prog, name),
-            avr_in=poly_c.input_lines(self.maps, p.lo, p.hi, name=name),
+            avr_in=poly_c.input_lines(self.maps, p.lo, p.hi, name=name if avr_asm else None, used=used),
             avr_out=poly_c.output_lines(self.prog, p.code_range, lambda a, b: f"{name}_mul({a}, {b})", name=name),
-            avr_asm=poly_avr.body(self.prog, p.code_range), p18_body=p18_body(self))
+            avr_asm=avr_asm, lsb_used=used, p18_body=p18_body(self))
 
     def estimate(self, target: str) -> dict:
         from nnik.implementations.poly_cost import estimate

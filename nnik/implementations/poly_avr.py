@@ -44,14 +44,14 @@ def _add_const(regs: list[str], k: int) -> list[str]:
     return out
 
 
-def body(prog: Program, code_range) -> list[str] | None:
+def body(prog: Program, code_range, name: str) -> list[str] | None:
     """The asm statement (C lines), or None when the values do not fit the register pairs.
     The DAC clamp is done in the assembly on the int16 result (or in C after it)."""
     from nnik.implementations.c_common import i32
 
     c_clamp = []
     # schedule: each output's sum right after the last step it needs (shorter live ranges)
-    done_at = {"u": -1, "v": -1}
+    done_at = {"u": -1, "v": -1, "rx": -1, "ry": -1}
     for i, st in enumerate(prog.steps):
         done_at[st.dst] = i
     out_after = [max([done_at[r] for A, B, _ in o.terms for r in (A, B) if isinstance(r, str)] + [-1])
@@ -81,6 +81,8 @@ def body(prog: Program, code_range) -> list[str] | None:
                 free.insert(0, where.pop(name))
 
     def load(reg_lo: str, op) -> list[str]:
+        if op in ("rx", "ry"):
+            return [f"lds {reg_lo}, {name}_r+{('rx', 'ry').index(op)}", f"clr r{int(reg_lo[1:]) + 1}"]
         if isinstance(op, str):
             return [f"movw {reg_lo}, {where[op]}"]
         v = int(op) & 0xFFFF
@@ -163,7 +165,7 @@ def body(prog: Program, code_range) -> list[str] | None:
              "        __asm__ __volatile__ ("]
     lines += [f'            "{a}\\n\\t"' for a in asm]
     lines.append('            : "+r" (ru), "+r" (rv)')
-    lines.append('            : "z" (out)')
+    lines.append('            : "z" (out)' + (f', "m" ({name}_r)' if any(x.startswith("lds") for x in asm) else ""))
     lines.append("            : " + ", ".join(f'"{c}"' for c in clob) + ', "memory");')
     lines.append("    }")
     for k in c_clamp:

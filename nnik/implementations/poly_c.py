@@ -17,7 +17,13 @@ def _operand(b) -> str:
     return b if isinstance(b, str) else _k16(b)
 
 
-def input_lines(maps, lo, hi, indent="    ", name: str | None = None) -> list[str]:
+def lsb_used(prog: Program) -> list[str]:
+    """Which of rx, ry (the bits the input shift drops) the outputs use."""
+    return [r for r in ("rx", "ry") if any(A == r for o in prog.outs for A, _, _ in o.terms)]
+
+
+def input_lines(maps, lo, hi, indent="    ", name: str | None = None, used=()) -> list[str]:
+    """Clamp, then u, v (and rx, ry: into NAME_r[] on avr-gcc, else into int16 locals)."""
     out = []
     for a, (var, src) in enumerate((("u", "x"), ("v", "y"))):
         out += [f"if ({src} < {i32(lo[a])}) {{ {src} = {i32(lo[a])}; clamped = 1; }}",
@@ -25,6 +31,12 @@ def input_lines(maps, lo, hi, indent="    ", name: str | None = None) -> list[st
     for a, (var, src) in enumerate((("u", "x"), ("v", "y"))):
         m = maps[a]
         d = f"({src} - {i32(m.c)})" if m.c else src
+        rname = ("rx", "ry")[a]
+        if rname in used:
+            mask = (1 << m.k) - 1
+            dst = f"{name}_r[{a}]" if name else rname
+            typ = "uint8_t" if name else "int16_t"
+            out.append(f"{dst} = ({typ})((uint16_t)(uint32_t){d} & {mask}u);")
         if m.k > 0 and name and m.k <= 8:
             out.append(f"{src} = {d};")
             out.append(f"{name.upper()}_ASR24({src}, {m.k});")
@@ -98,4 +110,4 @@ def avr_steps(prog: Program, name: str, indent="    ") -> list[str]:
 
 
 def values(prog: Program) -> list[str]:
-    return ["u", "v"] + [st.dst for st in prog.steps]
+    return ["u", "v"] + lsb_used(prog) + [st.dst for st in prog.steps]

@@ -35,6 +35,11 @@ class AxisMap:
         d = np.asarray(x, dtype=np.int64) - self.c
         return d >> self.k if self.k >= 0 else d << -self.k
 
+    def r(self, x: np.ndarray) -> np.ndarray:
+        """The bits the shift drops: d & (2^k - 1) (0 when k <= 0)."""
+        d = np.asarray(x, dtype=np.int64) - self.c
+        return d & ((1 << self.k) - 1) if self.k > 0 else np.zeros_like(d)
+
 
 def axis_maps(p: Problem) -> list[AxisMap]:
     maps = []
@@ -57,6 +62,13 @@ def t_of(p: Problem, x_units: np.ndarray) -> np.ndarray:
     c, _ = p.clamp(x_units)
     maps = axis_maps(p)
     return np.stack([maps[a].u(c[:, a]) for a in range(2)], 1) / 32768.0
+
+
+def delta_of(p: Problem, x_units: np.ndarray) -> np.ndarray:
+    """(N, 2): what the shift dropped, in units of t: r / 2^(15 + k)."""
+    c, _ = p.clamp(x_units)
+    maps = axis_maps(p)
+    return np.stack([maps[a].r(c[:, a]) / 2.0 ** (15 + max(maps[a].k, 0)) for a in range(2)], 1)
 
 
 # ---- symmetry ----------------------------------------------------------------------------------
@@ -151,8 +163,9 @@ def monomials(sym: Symmetry, degree: int, dx: int | None = None, dy: int | None 
             if 0 < i + j <= degree and sym.allows(i, j)]
 
 
-def fit_data(p: Problem) -> tuple[np.ndarray, np.ndarray]:
-    """(t (N, 2), truth (N, 2)) at integer inputs: problem.fit_samples() rounded to input units."""
+def fit_data(p: Problem) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(t (N, 2), truth (N, 2), delta (N, 2)) at integer inputs: problem.fit_samples() rounded
+    to input units."""
     key = ("poly_fit_data",)
     if key not in p.cache:
         x, q = p.fit_samples()
@@ -160,18 +173,22 @@ def fit_data(p: Problem) -> tuple[np.ndarray, np.ndarray]:
         if p.analytic:
             xi = np.unique(xi, axis=0)
             q = p.truth(xi)
-        p.cache[key] = (t_of(p, xi), np.asarray(q, dtype=np.float64))
+        p.cache[key] = (t_of(p, xi), np.asarray(q, dtype=np.float64), delta_of(p, xi))
     return p.cache[key]
 
 
-def design(t: np.ndarray, terms: list[tuple[int, int]]) -> np.ndarray:
+def design(t: np.ndarray, terms: list[tuple[int, int]], extra: np.ndarray | None = None) -> np.ndarray:
     cols = [np.ones(len(t))] + [t[:, 0] ** i * t[:, 1] ** j for i, j in terms]
+    if extra is not None:
+        cols += list(extra.T)
     return np.stack(cols, 1)
 
 
-def fit_poly(t: np.ndarray, q: np.ndarray, terms: list[tuple[int, int]], how: str) -> np.ndarray:
-    """Coefficients [c00, c_terms...] of q ~ c00 + sum c_ij t_x^i t_y^j (L-inf or L2)."""
-    a = design(t, terms)
+def fit_poly(t: np.ndarray, q: np.ndarray, terms: list[tuple[int, int]], how: str,
+             extra: np.ndarray | None = None) -> np.ndarray:
+    """Coefficients [c00, c_terms..., c_extra...] of q ~ c00 + sum c_ij t_x^i t_y^j
+    (+ sum c_k extra_k: the dropped input bits) (L-inf or L2)."""
+    a = design(t, terms, extra)
     scale = np.abs(a).max(0)
     scale[scale == 0] = 1.0
     a_s = a / scale

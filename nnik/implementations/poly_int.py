@@ -22,7 +22,7 @@ from nnik.errors import NnikError
 I16 = 32767
 MARGIN = 1.0 / 64  # headroom over the sampled range (the interval proof is the real check)
 SLACK = 8  # int16 units for the rounding errors that accumulate in a chain
-F_MAX = 30
+F_MAX = 31
 BOXES = 64  # per axis, for the interval proof
 
 
@@ -124,26 +124,51 @@ def plan_output(coefs: dict, c00: float, shared: dict, split: bool, grid_env: di
     cmn = {((i - ax) // sx, (j - ay) // sy): c for (i, j), c in coefs.items() if c != 0.0}
     xs = "u^2" if sx == 2 else "u"
     ys = "v^2" if sy == 2 else "v"
+    def term(a_node, cdict, build) -> list:
+        """[(a_node, H)] with H built from cdict, or split: [(a_node, C1), (a_node, G)]."""
+        h = build(cdict)
+        if h is None:
+            return []
+        if not (isinstance(h, Node) and split):
+            return [(a_node, h)]
+        hv = h.value(dict(grid_env))
+        c1 = qconst(0.5 * (hv.max() + hv.min()))
+        c2 = dict(cdict)
+        k0 = (0, 0) if isinstance(next(iter(cdict)), tuple) else 0
+        c2[k0] = c2.get(k0, 0.0) - c1
+        g = build(c2)
+        return ([(a_node, c1)] if c1 != 0.0 else []) + [(a_node, g)]
+
+    def b2(c):
+        return horner2(c, X, Y)
+
+    def b1(c):
+        return horner1(c, Y)
+
     if ax or ay:
         p = {(1, 0): shared["u"], (0, 1): shared["v"], (1, 1): shared["uv"]}[(ax, ay)]
         pname = {(1, 0): "u", (0, 1): "v", (1, 1): "uv"}[(ax, ay)]
-        h = horner2(cmn, X, Y)
-        if isinstance(h, Node) and split:
-            hv = h.value(dict(grid_env))
-            c1 = qconst(0.5 * (hv.max() + hv.min()))
-            cmn2 = dict(cmn)
-            cmn2[(0, 0)] = cmn2.get((0, 0), 0.0) - c1
-            g = horner2(cmn2, X, Y)
-            terms = [(p, c1), (p, g)] if c1 != 0.0 else [(p, g)]
-        else:
-            terms = [(p, h)]
-        return OutputPlan(terms, c00, f"{pname} * H({xs}, {ys})" + (" split" if split else ""))
-    hx = horner2({(m - 1, n): c for (m, n), c in cmn.items() if m >= 1}, X, Y)
-    hy = horner1({n - 1: c for (m, n), c in cmn.items() if m == 0 and n >= 1}, Y)
-    terms = [(X, hx)] if hx is not None else []
-    if hy is not None:
-        terms.append((Y, hy))
-    return OutputPlan(terms, c00, f"{xs} * HX + {ys} * HY")
+        return OutputPlan(term(p, cmn, b2), c00, f"{pname} * H({xs}, {ys})" + (" split" if split else ""))
+    terms = term(X, {(m - 1, n): c for (m, n), c in cmn.items() if m >= 1}, b2)
+    terms += term(Y, {n - 1: c for (m, n), c in cmn.items() if m == 0 and n >= 1}, b1)
+    return OutputPlan(terms, c00, f"{xs} * HX + {ys} * HY" + (" split" if split else ""))
+
+
+def split_constants(terms: list, env: dict, tol: float) -> list:
+    """A final product by a constant whose int16 rounding errs more than `tol` (output units)
+    over the domain becomes two products: the int16 constant and its finer remainder."""
+    out = []
+    for A, B in terms:
+        if isinstance(B, Node):
+            out.append((A, B))
+            continue
+        hi = qconst(B)
+        lo = B - hi
+        amax = float(np.abs(A.value(dict(env))).max())
+        out.append((A, hi))
+        if lo != 0.0 and amax * abs(lo) > tol:
+            out.append((A, lo))
+    return out
 
 
 # ---- the integer program --------------------------------------------------------------------------
@@ -212,25 +237,40 @@ def build_program(plans: list[OutputPlan], grid_env: dict, coef_bits: int, guard
     lower = lower or {}
     env = dict(grid_env)
     nodes = _topo(plans)
-    exps = {"u": 15, "v": 15}
-    for n in nodes:
-        val = n.value(env)
-        ea = exps[n.a.name]
-        if isinstance(n.b, Node):
-            eb = exps[n.b.name]
-            prod = n.a.value(env) * n.b.value(env)
-        else:
-            eb = const_exp(n.b)
-            prod = n.a.value(env) * n.b
-        e = _emax(np.abs(val).max(), guard)
-        if isinstance(n.add, Node):
-            e = min(e, exps[n.add.name], _emax(np.abs(prod).max(), guard))
-        elif n.add is not None:
-            e = min(e, _emax(abs(n.add), guard))  # 32-bit mode falls back to L when K is too wide
-        e = min(e, ea + eb) - lower.get(n.name, 0)
-        if isinstance(n.add, Node):
-            exps[n.add.name] = e  # lowering an earlier value's exponent is always safe
-        exps[n.name] = e
+    cap: dict = {}
+    for _ in range(4 * len(nodes) + 4):
+        exps = {"u": 15, "v": 15, "rx": grid_env.get("e_rx", 15), "ry": grid_env.get("e_ry", 15)}
+        for n in nodes:
+            val = n.value(env)
+            ea = exps[n.a.name]
+            if isinstance(n.b, Node):
+                eb = exps[n.b.name]
+                prod = n.a.value(env) * n.b.value(env)
+            else:
+                eb = const_exp(n.b)
+                prod = n.a.value(env) * n.b
+            e = min(_emax(np.abs(val).max(), guard), cap.get(n.name, 99))
+            if isinstance(n.add, Node):
+                e = min(e, exps[n.add.name], _emax(np.abs(prod).max(), guard))
+            elif n.add is not None:
+                e = min(e, _emax(abs(n.add), guard))  # 32-bit mode falls back to L when K is too wide
+            e = min(e, ea + eb) - lower.get(n.name, 0)
+            if isinstance(n.add, Node):
+                exps[n.add.name] = e  # lowering an earlier value's exponent is always safe
+            exps[n.name] = e
+        # a shift of more than F_MAX: make the operand coarser and go again
+        again = False
+        for n in nodes:
+            if isinstance(n.b, Node):
+                f = exps[n.a.name] + exps[n.b.name] - exps[n.name]
+                if f > F_MAX:
+                    for opnd, other in ((n.a, n.b), (n.b, n.a)):
+                        if opnd.kind == "mac":
+                            cap[opnd.name] = exps[n.name] + F_MAX - exps[other.name]
+                            again = True
+                            break
+        if not again:
+            break
     prog = Program(exps=exps)
     for n in nodes:
         e, ea = exps[n.name], exps[n.a.name]
@@ -294,14 +334,15 @@ def _imul(alo, ahi, blo, bhi, same: bool):
     return c.min(0), c.max(0)
 
 
-def prove(prog: Program, urange: list[tuple[int, int]]) -> str | None:
+def prove(prog: Program, urange: list[tuple[int, int]], rmax: tuple[int, int] = (0, 0)) -> str | None:
     """Interval arithmetic over BOXES x BOXES boxes of (u, v): every value in int16, every
     product + K and every partial output sum in int32. Returns the first failing value's name,
     or None; fills prog.bounds."""
     ulo, uhi = _box_edges(*urange[0], BOXES)
     vlo, vhi = _box_edges(*urange[1], BOXES)
     iv = {"u": (ulo[:, None] + 0 * vlo[None, :], uhi[:, None] + 0 * vhi[None, :]),
-          "v": (0 * ulo[:, None] + vlo[None, :], 0 * uhi[:, None] + vhi[None, :])}
+          "v": (0 * ulo[:, None] + vlo[None, :], 0 * uhi[:, None] + vhi[None, :]),
+          "rx": (np.int64(0), np.int64(rmax[0])), "ry": (np.int64(0), np.int64(rmax[1]))}
     i32lo, i32hi = -(2**31), 2**31 - 1
 
     def get(b):
@@ -341,9 +382,9 @@ def prove(prog: Program, urange: list[tuple[int, int]]) -> str | None:
 
 # ---- the numpy model ---------------------------------------------------------------------------
 
-def evaluate(prog: Program, u: np.ndarray, v: np.ndarray) -> np.ndarray:
-    """(N,) int64 u, v -> (N, 2) int64 num, checking every range on the way."""
-    vals = {"u": u.astype(np.int64), "v": v.astype(np.int64)}
+def evaluate(prog: Program, u: np.ndarray, v: np.ndarray, rx: np.ndarray, ry: np.ndarray) -> np.ndarray:
+    """(N,) int64 u, v (and the dropped bits rx, ry) -> (N, 2) int64 num, checking every range."""
+    vals = {"u": u.astype(np.int64), "v": v.astype(np.int64), "rx": rx.astype(np.int64), "ry": ry.astype(np.int64)}
 
     def get(b):
         return vals[b] if isinstance(b, str) else np.int64(b)

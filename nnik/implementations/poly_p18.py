@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from nnik.implementations.c_common import i32
 
-OFF_D, OFF_P, OFF_O, OFF_H = 0, 8, 12, 20
+OFF_D, OFF_P, OFF_O, OFF_R, OFF_H = 0, 8, 12, 20, 24
 PRODL, PRODH, WREG = "0xFF3", "0xFF4", "0xFE8"
 
 
@@ -77,12 +77,15 @@ def _add_const(a: _Asm, off: int, n: int, k: int) -> None:
 
 
 def p18_body(impl) -> str | None:
+    from nnik.implementations.poly_c import lsb_used
+
     prog = impl.prog
+    used = lsb_used(prog)
     p = impl.problem
     name = p.name
     w = f"{name}_p18w"
     a = _Asm(f"_{w}")
-    where = {"u": OFF_D, "v": OFF_D + 4}
+    where = {"u": OFF_D, "v": OFF_D + 4, "rx": OFF_R, "ry": OFF_R + 2}
     nv = 0
     for st in prog.steps:
         where[st.dst] = OFF_H + 2 * nv
@@ -158,7 +161,8 @@ def p18_body(impl) -> str | None:
         "    int32_t d[2];  /* +0: x - c, y - c; then u, v in their low halves */",
         "    uint8_t p[4];  /* +8: the product */",
         "    int32_t o[2];  /* +12: the outputs */",
-        f"    int16_t h[{max(nv, 1)}];  /* +20: the Horner values */",
+        "    int16_t r[2];  /* +20: the bits the input shifts drop */",
+        f"    int16_t h[{max(nv, 1)}];  /* +24: the Horner values */",
         f"}} {w};",
         "",
         f"int8_t {name}_ik(const int32_t in_um[{name.upper()}_N_IN], int32_t out[{name.upper()}_N_OUT])",
@@ -174,6 +178,8 @@ def p18_body(impl) -> str | None:
                   f"    else if ({src} > {i32(hi[j])}) {{ {src} = {i32(hi[j])}; clamped = 1; }}"]
         c = impl.maps[j].c
         lines.append(f"    {w}.d[{j}] = {src} - {i32(c)};" if c else f"    {w}.d[{j}] = {src};")
+        if ("rx", "ry")[j] in used:
+            lines.append(f"    {w}.r[{j}] = (int16_t)((uint16_t)(uint32_t){w}.d[{j}] & {(1 << impl.maps[j].k) - 1}u);")
     lines.append("    __asm__(")
     lines += [f'        "{x}\\n"' if x.endswith(":") else f'        "\\t{x}\\n"' for x in a.lines]
     lines.append("    );")
