@@ -99,7 +99,7 @@ class MlpImpl(Implementation):
         return IntRun(pre=total / float(2**self.im.out.F), out=out, flags=flags)
 
     def render_c(self) -> dict[str, str]:
-        from nnik.export import render_model_c
+        from nnik.emit.export import render_model_c
 
         return render_model_c(self.im, self.problem.scn.source)
 
