@@ -84,3 +84,12 @@ def test_bit_exact_on_the_chip_fast_and_portable(tmp_path, target, tool):
     e = im.estimate(target)
     assert e["validated"] is True
     assert abs(e["cycles"] - fast["cycles"]) <= 0.03 * fast["cycles"]
+
+
+def test_estimate_is_calibrated():
+    im = HybridImpl.fit(problem("corexy_nonlinear"), {**COREXY, "fit": "lsq"})
+    for target in ("avr", "pic18"):
+        e = im.estimate(target)
+        assert e["validated"] is True  # the stored calibration matches today's C and harnesses
+        assert 300 < e["cycles"] < 1500
+        assert e["flash_bytes"] > im.model_bytes()
