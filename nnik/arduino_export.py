@@ -3,7 +3,7 @@
 DIR/library.properties, DIR/library.json, DIR/src/ (NAME.c/.h, the runtime headers, the G-code
 engine and its configuration), DIR/examples/NAME_selftest/ (golden vectors from the integer
 model, PASS/FAIL and cycles per call) and DIR/examples/NAME_gcode/ (G-code over Serial to two
-stepper drivers).
+stepper drivers); each example has a Makefile for Debian's arduino-mk.
 """
 
 from __future__ import annotations
@@ -83,9 +83,11 @@ def export_arduino(outdir: Path, libdir: Path, machine: MachineConfig | None = N
         libdir / "examples" / f"{name}_selftest" / f"{name}_selftest.ino": "selftest.ino.j2",
         libdir / "examples" / f"{name}_gcode" / f"{name}_gcode.ino": "gcode.ino.j2",
     }
+    for example in (f"{name}_selftest", f"{name}_gcode"):
+        files[libdir / "examples" / example / "Makefile"] = "Makefile.j2"
     for path, tmpl in files.items():
         path.parent.mkdir(parents=True, exist_ok=True)
-        path.write_text(env.get_template(tmpl).render(**ctx))
+        path.write_text(env.get_template(tmpl).render(**ctx, example=path.parent.name, libdir_name=libdir.resolve().name))
     return {"libname": libname, "dir": str(libdir), "name": name, "machine": machine, "golden": len(rows)}
 
 

@@ -95,3 +95,25 @@ def test_bad_lines_get_the_same_error_on_the_chip(firmware):
     assert got == want
     assert want[1] == "error: line 2: unsupported word Z" and want[3] == "error: line 4: line too long"
     assert sum(r.startswith("error:") for r in want) == 5
+
+
+def test_arduino_mk_builds_the_selftest_that_passes(firmware, tmp_path):
+    """The library as a user builds it: Debian's arduino-mk over the Arduino core."""
+    import shutil
+    import subprocess
+
+    mk = Path("/usr/share/arduino/Arduino.mk")
+    if not mk.is_file() or shutil.which("make") is None:
+        if os.environ.get("NNIK_REQUIRE_TOOLCHAINS") == "1":
+            pytest.fail("arduino-mk not installed")
+        pytest.skip("arduino-mk not installed (run scripts/install_toolchains.sh)")
+    run, lib, _, _, _ = firmware["galvo_cba2012"]
+    libdir = tmp_path / "libraries" / "my_nnik"
+    export_arduino(run, libdir)
+    ex = libdir / "examples" / "galvo_cba2012_selftest"
+    r = subprocess.run(["make", "-s"], cwd=ex, capture_output=True, text=True, timeout=600)
+    assert r.returncode == 0, r.stderr[-500:]
+    elf = next((ex / "build-uno").glob("*.elf"))
+    res = chip.run_firmware(chip.Firmware(elf, 0, 0), [], tmp_path, 5.0)
+    assert res.state == "halted"
+    assert [t for _, t in res.replies][-1].startswith("PASS 64 vectors, cycles per call: mean ")
