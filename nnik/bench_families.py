@@ -59,7 +59,10 @@ def ensure_trained(name: str) -> Path:
 def run_goal(g: Goal) -> dict:
     out = ensure_trained(g.scenario)
     try:
-        sec = pipeline.select(out, target={"chip": g.chip, "max_error": g.max_error})
+        target = {"chip": g.chip, "max_error": g.max_error}
+        if g.max_flash:  # a user asking for both states both: the flash limit is part of the target
+            target["max_flash_bytes"] = g.max_flash
+        sec = pipeline.select(out, target=target)
         error = None
     except NnikError as exc:
         sec, error = pipeline.load_metrics(out)["selection"], str(exc)

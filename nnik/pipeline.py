@@ -399,7 +399,8 @@ def select(outdir: Path, progress: bool = True, families=None, target: dict | No
 
     problem = problem_for(outdir)
     target = {**problem.scn.target, **(target or {})}
-    cands = sel.fit_ladder(problem, families, progress=(lambda **k: tqdm(leave=False, **k)) if progress else None)
+    cands = sel.fit_ladder(problem, families, progress=(lambda **k: tqdm(leave=False, **k)) if progress else None,
+                           max_error=target["max_error"])
     bests = sel.family_bests(cands, target)
     reachable = any(c.meets(target["max_error"]) for c in cands)
     if reachable:

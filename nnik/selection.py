@@ -52,27 +52,59 @@ class Candidate:
         return r
 
 
-def fit_ladder(problem: Problem, families=None, progress=None) -> list[Candidate]:
-    """Every family's ladder, fitted and measured on the check grid, with cost estimates."""
-    out = []
+ENOUGH = 4  # a family's ladder stops once this many configurations meet max_error (ladders go cheapest first)
+QUICK_POINTS = 60_000  # a configuration is first judged on this many check points
+
+
+def fit_ladder(problem: Problem, families=None, progress=None, max_error: float | None = None) -> list[Candidate]:
+    """Every family's ladder, fitted and measured on the check grid, with cost estimates.
+
+    With ``max_error``, a configuration is first judged on a subsample of the check set (its
+    error there is a lower bound); only those that pass it, and each family's most accurate
+    one, get the full check. A family's ladder stops once ENOUGH configurations meet it; the
+    rest are recorded as not fitted."""
     fams = [f for f in (families or FAMILIES)]
     jobs = [(f, cfg) for f in fams for cfg in FAMILIES[f].ladder(problem)]
     bar = progress(total=len(jobs), desc="fit families", unit="config") if progress else None
+    quick = _quick_points(problem) if max_error is not None else None
+    out: list[Candidate] = []
+    met: dict[str, int] = {}
     for fam, cfg in jobs:
         c = Candidate(fam, cfg)
-        try:
-            c.impl = FAMILIES[fam].fit(problem, cfg)
-            c.acc = accuracy(c.impl)
-            c.est = {t: c.impl.estimate(t) for t in TARGETS}
-        except NnikError as exc:
-            c.impl, c.skipped = None, str(exc)
+        if max_error is not None and met.get(fam, 0) >= ENOUGH:
+            c.skipped = f"not fitted: {ENOUGH} cheaper configurations of the ladder already meet max_error"
+        else:
+            try:
+                c.impl = FAMILIES[fam].fit(problem, cfg)
+                if quick is not None:
+                    c.acc = accuracy(c.impl, quick)
+                if quick is None or c.acc["pre_max"] <= max_error:
+                    c.acc = accuracy(c.impl)
+                c.est = {t: c.impl.estimate(t) for t in TARGETS}
+            except NnikError as exc:
+                c.impl, c.skipped = None, str(exc)
+            if max_error is not None and c.meets(max_error):
+                met[fam] = met.get(fam, 0) + 1
         out.append(c)
         if bar:
             bar.update(1)
-            bar.set_postfix_str(f"{fam}: {c.acc.get('pre_max', float('nan')):.3g}" if c.impl else f"{fam}: skipped")
+            bar.set_postfix_str(f"{fam}: {c.acc.get('pre_max', float('nan')):.3g}" if c.impl else f"{fam}: -")
     if bar:
         bar.close()
+    for fam in fams:  # the most accurate of a family that never met the target gets the full check
+        fitted = [c for c in out if c.family == fam and c.impl is not None]
+        if fitted and not any(c.meets(max_error) for c in fitted if max_error is not None):
+            top = min(fitted, key=lambda c: c.acc["pre_max"])
+            if top.acc.get("points") != len(problem.check[0]):
+                top.acc = accuracy(top.impl)
     return out
+
+
+def _quick_points(problem: Problem):
+    """A fixed subsample of the check set (every corner and edge point kept by the stride)."""
+    pts, truth = problem.check
+    step = max(1, len(pts) // QUICK_POINTS)
+    return pts[::step], truth[::step]
 
 
 def family_bests(cands: list[Candidate], target: dict) -> dict[str, Candidate]:
