@@ -17,10 +17,9 @@ import numpy as np
 
 from nnik import pipeline
 from nnik.domain import domain_um
-from nnik.errors import NnikError
-from nnik.gcode.motion import MachineConfig
 from nnik.emit.templating import CODEGEN, RUNTIME, environment
-from nnik.gcode.oracle import ik_oracle, ik_sources, load_scenario_of
+from nnik.firmware_config import MachineConfig, default_machine
+from nnik.ik_oracle import ik_oracle, ik_sources, load_scenario_of
 
 ARDUINO = CODEGEN / "arduino"
 ENGINE_FILES = ("nnik_gcode.h", "nnik_gcode.c")
@@ -31,12 +30,6 @@ N_GOLDEN = 64
 @lru_cache(maxsize=1)
 def _env() -> jinja2.Environment:
     return environment().overlay(loader=jinja2.FileSystemLoader(str(ARDUINO / "templates")))
-
-
-def default_machine(scn) -> MachineConfig:
-    """Program (0, 0) at the centre of the workspace, 0.5 mm segments, 10 kHz ticks."""
-    lo, hi = domain_um(scn.workspace)
-    return MachineConfig(origin_um=tuple(int(v) for v in (lo + hi) // 2))
 
 
 def golden_vectors(scn, n: int = N_GOLDEN, seed: int = 0) -> np.ndarray:

@@ -14,7 +14,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from nnik.gcode.motion import MachineConfig, Move, Plan, Segments
+from nnik.firmware_config import MachineConfig
+from nnik.gcode.motion import Move, Plan, Segments
 
 CHORD_SAMPLES = 16
 

@@ -15,8 +15,9 @@ import numpy as np
 
 from nnik.errors import NnikError
 from nnik.gcode.contour import contour_report
-from nnik.gcode.motion import MachineConfig, interpret, plan_steps
-from nnik.gcode.oracle import ik_oracle, load_scenario_of
+from nnik.firmware_config import MachineConfig
+from nnik.gcode.motion import interpret, plan_steps
+from nnik.ik_oracle import ik_oracle, load_scenario_of
 from nnik.gcode.parse import split_lines
 from nnik.gcode.plot import job_png
 from nnik.gcode.steps import chip_events, model_events
@@ -68,7 +69,7 @@ def chip_run(outdir: Path, lines: list[str], cfg: MachineConfig, seconds: float,
 
 def run_job(outdir: Path, job_path: Path, seg_um: int | None = None, use_chip: bool | None = None) -> dict:
     """Run a job; use_chip None: on the simulated chip when the toolchain is there."""
-    from nnik.arduino_export import default_machine
+    from nnik.firmware_config import default_machine
     from nnik.gcode import chip
 
     outdir, job_path = Path(outdir), Path(job_path)

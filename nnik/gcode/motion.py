@@ -11,29 +11,12 @@ from math import isqrt
 
 import numpy as np
 
+from nnik.firmware_config import MachineConfig
 from nnik.gcode.parse import GcodeLineError, parse_line
 
 POS_LIMIT = 2**28 - 1  # um
 MIN_FEED = 1000  # um/min
 ARC_STACK = 32
-
-
-@dataclass(frozen=True)
-class MachineConfig:
-    """What nnik_gcode_config.h fixes: work origin (machine um of program (0, 0)), segment
-    length, tick rate, rapid and default feed (um/min)."""
-
-    origin_um: tuple[int, int]
-    seg_um: int = 500
-    tick_hz: int = 10_000
-    rapid_um_min: int = 3_000_000
-    feed_um_min: int = 600_000
-
-    def __post_init__(self):
-        if not 100 <= self.seg_um <= 5000:
-            raise ValueError("segment length must be 100..5000 um")
-        if self.tick_hz > 12_000:
-            raise ValueError("tick rate above 12 kHz overflows the 32-bit tick count")
 
 
 @dataclass(frozen=True)

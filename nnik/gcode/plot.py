@@ -11,7 +11,8 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from nnik.gcode.contour import move_dist  # noqa: E402
-from nnik.gcode.motion import MachineConfig, Plan  # noqa: E402
+from nnik.firmware_config import MachineConfig  # noqa: E402
+from nnik.gcode.motion import Plan  # noqa: E402
 
 
 def _path_points(plan: Plan, cfg: MachineConfig, n: int = 400) -> list[np.ndarray]:

@@ -12,7 +12,7 @@ from nnik import pipeline
 from nnik.arduino_export import export_arduino
 from nnik.gcode.host import run_engine_host
 from nnik.gcode.motion import interpret, plan_steps
-from nnik.gcode.oracle import ik_oracle
+from nnik.ik_oracle import ik_oracle
 from nnik.gcode.parse import split_lines
 
 JOBS = Path(__file__).resolve().parents[2] / "datasets" / "jobs"

@@ -7,7 +7,8 @@ from math import ceil, isqrt
 import numpy as np
 import pytest
 
-from nnik.gcode.motion import Interpreter, MachineConfig, interpret, plan_steps
+from nnik.firmware_config import MachineConfig
+from nnik.gcode.motion import Interpreter, interpret, plan_steps
 
 CFG = MachineConfig(origin_um=(0, 0), seg_um=500)
 
