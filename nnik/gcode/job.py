@@ -67,6 +67,19 @@ def chip_run(outdir: Path, lines: list[str], cfg: MachineConfig, seconds: float,
             "segments_started": int(len(run.marks)), "end_cycle": run.end_cycle}
 
 
+def write_step_counts(path: Path, steps: np.ndarray, start: np.ndarray) -> Path:
+    """Each motor's count over time as the chip's pins show it: cycle, motor, dir, count after."""
+    counts = np.zeros((len(steps), 2), np.int64)
+    sign = np.where(steps[:, 2] == 1, 1, -1)
+    for m in range(2):
+        sel = steps[:, 1] == m
+        counts[sel, m] = start[m] + np.cumsum(sign[sel])
+    path.parent.mkdir(parents=True, exist_ok=True)
+    rows = [f"{c},{m},{d},{counts[i, m]}" for i, (c, m, d) in enumerate(steps.tolist())]
+    path.write_text("cycle,motor,dir,count\n" + "".join(r + "\n" for r in rows))
+    return path
+
+
 def run_job(outdir: Path, job_path: Path, seg_um: int | None = None, use_chip: bool | None = None) -> dict:
     """Run a job; use_chip None: on the simulated chip when the toolchain is there."""
     from nnik.firmware_config import default_machine
@@ -95,6 +108,7 @@ def run_job(outdir: Path, job_path: Path, seg_um: int | None = None, use_chip: b
         c = chip_run(outdir, lines, cfg, res["seconds"], outdir / JOB_DIR / "work" / job_path.stem)
         ev = c.pop("events")
         run = c.pop("run")
+        c["steps_csv"] = str(write_step_counts(outdir / JOB_DIR / f"{job_path.stem}_chip_steps.csv", run.steps, seg.steps[0]))
         same = ev.shape == events.shape and bool((ev == events).all())
         busy = (run.busy[:, 1] - run.busy[:, 0]).astype(np.float64)
         c.update({"steps": int(len(ev)), "steps_equal": same, "replies_equal": c["replies"] == plan.replies})

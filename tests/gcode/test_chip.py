@@ -84,6 +84,12 @@ def test_shipped_job_end_to_end_with_selftest_rate_and_plot(firmware):
     assert c["segment_rate_hz"]["mean"] == pytest.approx(0.5 * CLOCK_HZ / cps["mean"])
     assert Path(res["png"]).stat().st_size > 10_000
     assert res["contour_um"]["max"] >= res["chord_um"]["max"]
+    # the step counts rebuilt from the pins end where the IK puts the L's last corner
+    rows = np.loadtxt(c["steps_csv"], delimiter=",", skiprows=1, dtype=np.int64)
+    origin = np.asarray(firmware["corexy_nonlinear"][1]["machine"].origin_um)
+    end, _ = firmware["corexy_nonlinear"][3](origin[None, :] + [[10_000, 10_000]])
+    for m in range(2):
+        assert rows[rows[:, 1] == m][-1, 3] == end[0, m]
 
 
 def test_bad_lines_get_the_same_error_on_the_chip(firmware):
