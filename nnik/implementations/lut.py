@@ -8,6 +8,8 @@ Knobs (``config``):
     W         16 | 8: bits of the cell fraction (8 is cheaper, coarser within a cell)
     fit       "lsq" | "minimax"
     symmetry  true | false: fold the axes the numerical symmetry check allows
+    separable true | false: a 1-D table for an output the exact IK shows to depend on one
+              input only (e.g. a galvo's y mirror)
     fb        optional: force the fractional bits of the entries (else range analysis)
 """
 
@@ -21,10 +23,10 @@ from nnik.errors import NnikError
 from nnik.implementations.base import Implementation, IntRun
 from nnik.implementations.c_common import comment_safe, i32
 from nnik.implementations.lut_c import table_ctx
-from nnik.implementations.lut_table import Grid, Table, fit_nodes, fold_plan, quantise
+from nnik.implementations.lut_table import Grid, Table, dependence, fit_nodes, fold_plan, quantise
 from nnik.implementations.problem import Problem
 
-DEFAULTS = {"bits": 16, "W": 16, "fit": "lsq", "symmetry": True}
+DEFAULTS = {"bits": 16, "W": 16, "fit": "lsq", "symmetry": True, "separable": True}
 
 
 def fit_points(problem: Problem, grid: Grid) -> tuple[np.ndarray, np.ndarray]:
@@ -65,8 +67,9 @@ def build_table(problem: Problem, cfg: dict, targets=None, symmetry: bool | None
     grid = Grid.make(problem.lo, problem.hi, cfg["k"], fold, int(cfg.get("W", 16)))
     pts, q = fit_points(problem, grid) if targets is None else targets
     t, qf = fold_targets(grid, odd, np.asarray(pts, dtype=np.float64), q)
-    vals, _ = fit_nodes(grid, t, qf, odd, cfg.get("fit", "lsq"), measured=not problem.analytic)
-    return quantise(grid, vals, int(cfg.get("bits", 16)), odd, cfg.get("fb"))
+    dep = dependence(problem, bool(cfg.get("separable", True)))
+    vals, _ = fit_nodes(grid, t, qf, odd, cfg.get("fit", "lsq"), measured=not problem.analytic, dep=dep)
+    return quantise(grid, vals, int(cfg.get("bits", 16)), odd, cfg.get("fb"), dep=dep)
 
 
 def k_for_nodes(span: int, nodes: int) -> int:
@@ -180,7 +183,8 @@ class LutImpl(Implementation):
         g = t.grid
         fold = "".join(a for a, f in zip("xy", g.fold) if f)
         sym = f", folded in {fold}" if fold else ""
-        return (f"lut {g.n[0]}x{g.n[1]} int{t.bits} (cells 2^{g.k[0]} x 2^{g.k[1]}, Q{g.W} fraction, "
+        one = "".join(f", {self.problem.outputs[o]} 1-D in {t.dep[o]}" for o in range(2) if t.dep[o] != "xy")
+        return (f"lut {g.n[0]}x{g.n[1]}{one} int{t.bits} (cells 2^{g.k[0]} x 2^{g.k[1]}, Q{g.W} fraction, "
                 f"{self.config.get('fit', 'lsq')}{sym})")
 
 

@@ -24,11 +24,12 @@ ZERO, NEG = "r8", "r9"
 def _macsu(W: int, u) -> list[str]:
     """A += U * D, U unsigned (W bits), D signed 16 (modulo 2^32)."""
     z = ZERO
+    load = [] if u is None else [f"mov {U[0]}, {u[0]}"] if W == 8 else [f"movw {U[0]}, {u[0]}"]
     if W == 8:
-        return [f"mov {U[0]}, {u[0]}",
+        return load + [
                 f"mul {D[0]}, {U[0]}", f"add {A[0]}, r0", f"adc {A[1]}, r1", f"adc {A[2]}, {z}", f"adc {A[3]}, {z}",
                 f"mulsu {D[1]}, {U[0]}", f"sbc {A[3]}, {z}", f"add {A[1]}, r0", f"adc {A[2]}, r1", f"adc {A[3]}, {z}"]
-    return [f"movw {U[0]}, {u[0]}",
+    return load + [
             f"mul {U[0]}, {D[0]}", f"add {A[0]}, r0", f"adc {A[1]}, r1", f"adc {A[2]}, {z}", f"adc {A[3]}, {z}",
             f"mul {U[1]}, {D[0]}", f"add {A[1]}, r0", f"adc {A[2]}, r1", f"adc {A[3]}, {z}",
             f"mulsu {D[1]}, {U[0]}", f"sbc {A[3]}, {z}", f"add {A[1]}, r0", f"adc {A[2]}, r1", f"adc {A[3]}, {z}",
@@ -118,14 +119,55 @@ def weights(W: int) -> list[str]:
             f"sub {AW[0]}, {W11[0]}", f"sbc {AW[1]}, {W11[1]}"]
 
 
-def pointer(tab) -> list[str]:
-    """Z = table + (iy NX + ix) * entry bytes (ix in r6, iy in r20)."""
-    g = tab.grid
+def _offset(tab, dep: str) -> list[str]:
+    """r1:r0 = byte offset of output's node: (iy NX + ix), iy or ix, times the entry size."""
     B = tab.bits // 8
-    code = [f"ldi {U[0]}, {g.n[0]}", f"mul {A[2]}, {U[0]}", f"add r0, {W11[0]}", f"adc r1, {ZERO}"]
-    code += ["lsl r0", "rol r1"] * (B.bit_length() - 1)
-    code += ["movw r30, r0", "subi r30, lo8(-(%[tab]))", "sbci r31, hi8(-(%[tab]))"]
+    if dep == "xy":
+        code = [f"ldi {U[0]}, {tab.grid.n[0]}", f"mul {A[2]}, {U[0]}", f"add r0, {W11[0]}", f"adc r1, {ZERO}"]
+    else:
+        code = [f"mov r0, {A[2] if dep == 'y' else W11[0]}", "clr r1"]
+    return code + ["lsl r0", "rol r1"] * (B.bit_length() - 1)
+
+
+P1 = ("r12", "r13")  # output 1's node offset when the outputs' tables differ in shape
+
+
+def pointer(tab, toff) -> list[str]:
+    """Z = output 0's node (ix in r6, iy in r20); r13:r12 = output 1's offset if needed."""
+    B = tab.bits // 8
+    code = _offset(tab, tab.dep[0])
+    if tab.dep != ("xy", "xy"):
+        code += [f"movw {P1[0]}, r0"] if tab.dep[1] == tab.dep[0] else []
+    code += ["movw r30, r0", f"subi r30, lo8(-(%[tab] + {toff[0] * B}))", f"sbci r31, hi8(-(%[tab] + {toff[0] * B}))"]
+    if tab.dep != ("xy", "xy") and tab.dep[1] != tab.dep[0]:
+        code += _offset(tab, tab.dep[1]) + [f"movw {P1[0]}, r0"]
     return code
+
+
+def output_1d(tab, o: int) -> list[str]:
+    """A 1-D output (dep "y": e00, e01 along y with fy; "x": e00, e10 with fx = a + w11)."""
+    B = tab.bits // 8
+    W = tab.grid.W
+    code = [f"lpm {E[0]}, Z+", f"lpm {E[1]}, Z+"]
+    code += _acc_init(B, W)
+    code += [f"lpm {D[0]}, Z+", f"lpm {D[1]}, Z+", f"sub {D[0]}, {E[0]}", f"sbc {D[1]}, {E[1]}"]
+    if tab.dep[o] == "y":
+        return code + _macsu(W, FY)
+    if W == 16:
+        code += [f"movw {U[0]}, {AW[0]}", f"add {U[0]}, {W11[0]}", f"adc {U[1]}, {W11[1]}"]
+    else:
+        code += [f"mov {U[0]}, {AW[0]}", f"add {U[0]}, {W11[0]}"]
+    return code + _macsu(W, None)
+
+
+def _acc_init(B: int, W: int) -> list[str]:
+    """A = e00 2^W (int16) or 0 (int32, after reading e00's high word)."""
+    if B == 4:
+        return [f"lpm {E[2]}, Z+", f"lpm {E[3]}, Z+"] + [f"clr {r}" for r in A]
+    if W == 16:
+        return [f"clr {A[0]}", f"clr {A[1]}", f"movw {A[2]}, {E[0]}"]
+    return [f"clr {A[0]}", f"mov {A[1]}, {E[0]}", f"mov {A[2]}, {E[1]}",
+            f"mov {A[3]}, {E[1]}", f"lsl {A[3]}", f"sbc {A[3]}, {A[3]}"]
 
 
 def output_acc(tab, o: int) -> list[str]:
@@ -135,14 +177,9 @@ def output_acc(tab, o: int) -> list[str]:
     B = tab.bits // 8
     W = g.W
     skip = ["adiw r30, 2"] if B == 4 else []
-    code = [f"lpm {E[0]}, Z+", f"lpm {E[1]}, Z+"]
-    if B == 4:
-        code += [f"lpm {E[2]}, Z+", f"lpm {E[3]}, Z+"] + [f"clr {r}" for r in A]
-    elif W == 16:
-        code += [f"clr {A[0]}", f"clr {A[1]}", f"movw {A[2]}, {E[0]}"]
-    else:
-        code += [f"clr {A[0]}", f"mov {A[1]}, {E[0]}", f"mov {A[2]}, {E[1]}",
-                 f"mov {A[3]}, {E[1]}", f"lsl {A[3]}", f"sbc {A[3]}, {A[3]}"]
+    if tab.dep[o] != "xy":
+        return output_1d(tab, o) + _combine(tab, o)
+    code = [f"lpm {E[0]}, Z+", f"lpm {E[1]}, Z+"] + _acc_init(B, W)
     code += [f"lpm {D[0]}, Z+", f"lpm {D[1]}, Z+"] + skip + [f"sub {D[0]}, {E[0]}", f"sbc {D[1]}, {E[1]}"]
     code += _macsu(W, AW)
     adj = g.n[0] * B - 2 * B
@@ -151,6 +188,14 @@ def output_acc(tab, o: int) -> list[str]:
     code += [f"movw {D[0]}, {F[0]}", f"sub {D[0]}, {E[0]}", f"sbc {D[1]}, {E[1]}"] + _macsu(W, FY)
     code += [f"lpm {D[0]}, Z+", f"lpm {D[1]}, Z+"] + skip + [f"sub {D[0]}, {F[0]}", f"sbc {D[1]}, {F[1]}"]
     code += _macsu(W, W11)
+    return code + _combine(tab, o)
+
+
+def _combine(tab, o: int) -> list[str]:
+    """int32 entries: acc = e00 + (S >> W); then the odd output's negation."""
+    B = tab.bits // 8
+    W = tab.grid.W
+    code = []
     if B == 4:  # acc = e00 + (S >> W)
         if W == 16:
             code += [f"movw {D[0]}, {A[2]}", f"clr {F[0]}", f"sbrc {D[1]}, 7", f"com {F[0]}",
@@ -221,13 +266,16 @@ def lines(impl, ctx, base_hook=None, after_clamp=None) -> list[str]:
     tab = impl.table
     g = tab.grid
     code = input_stage(impl, ctx["flipmask"], after_clamp)
-    code += pointer(tab) + weights(g.W)
+    code += pointer(tab, ctx["toff"]) + weights(g.W)
     nn = g.n[0] * g.n[1]
     B = tab.bits // 8
     for o in range(2):
-        if o == 1:
+        if o == 1 and tab.dep == ("xy", "xy"):
             adj = nn * B - (g.n[0] + 2) * B
             code += [f"subi r30, lo8({-adj})", f"sbci r31, hi8({-adj})"]
+        elif o == 1:
+            k1 = ctx["toff"][1] * B
+            code += [f"movw r30, {P1[0]}", f"subi r30, lo8(-(%[tab] + {k1}))", f"sbci r31, hi8(-(%[tab] + {k1}))"]
         code += output_acc(tab, o)
         if base_hook is not None:
             code += base_hook(o)

@@ -149,15 +149,30 @@ def table_part(impl, asm: Asm, flipmask, after_clamp=None) -> list[str]:
             asm += ([f"movff {v[0]}, {asm.at('fy')}", f"movff {v[1]}, {asm.at('fy', 1)}"] if W == 16
                     else [f"movff {v[1]}, {asm.at('fy')}"])
         flush()
-    # pointer: TBLPTR = tab + (iy NX + ix) B
+    # pointers: TBLPTR = output 0's node; r[0..1] = output 1's byte offset when shapes differ
     tsym = f"_{p.name}_tab"
-    asm += [f"movf {asm.at('v', 6)}, W, B", f"mullw {g.n[0]}", f"movf {asm.at('ix')}, W, B",
-            f"addwf {PRODL}, F, A", "movlw 0", f"addwfc {PRODH}, F, A"]
-    for _ in range(B.bit_length() - 1):
-        asm += [f"bcf {STATUS}, 0, A", f"rlcf {PRODL}, F, A", f"rlcf {PRODH}, F, A"]
-    asm += [f"movlw LOW({tsym})", f"addwf {PRODL}, W, A", f"movwf {TBLPTRL}, A", f"movlw HIGH({tsym})",
-            f"addwfc {PRODH}, W, A", f"movwf {TBLPTRH}, A", f"movlw UPPER({tsym})", f"movwf {TBLPTRU}, A",
-            "movlw 0", f"addwfc {TBLPTRU}, F, A"]
+    toff = [k * B for k in table_offsets(tab)]
+
+    def offset(dep):
+        if dep == "xy":
+            code = [f"movf {asm.at('v', 6)}, W, B", f"mullw {g.n[0]}", f"movf {asm.at('ix')}, W, B",
+                    f"addwf {PRODL}, F, A", "movlw 0", f"addwfc {PRODH}, F, A"]
+        else:
+            code = [f"movff {asm.at('v', 6) if dep == 'y' else asm.at('ix')}, {PRODL}", f"clrf {PRODH}, A"]
+        for _ in range(B.bit_length() - 1):
+            code += [f"bcf {STATUS}, 0, A", f"rlcf {PRODL}, F, A", f"rlcf {PRODH}, F, A"]
+        return code
+
+    asm += offset(tab.dep[0])
+    if tab.dep != ("xy", "xy"):
+        if tab.dep[1] != tab.dep[0]:
+            asm += [f"movff {PRODL}, {asm.at('t')}", f"movff {PRODH}, {asm.at('t', 1)}"] + offset(tab.dep[1])
+        asm += [f"movff {PRODL}, {asm.at('r')}", f"movff {PRODH}, {asm.at('r', 1)}"]
+        if tab.dep[1] != tab.dep[0]:
+            asm += [f"movff {asm.at('t')}, {PRODL}", f"movff {asm.at('t', 1)}, {PRODH}"]
+    asm += [f"movlw LOW({tsym} + {toff[0]})", f"addwf {PRODL}, W, A", f"movwf {TBLPTRL}, A",
+            f"movlw HIGH({tsym} + {toff[0]})", f"addwfc {PRODH}, W, A", f"movwf {TBLPTRH}, A",
+            f"movlw UPPER({tsym} + {toff[0]})", f"movwf {TBLPTRU}, A", "movlw 0", f"addwfc {TBLPTRU}, F, A"]
     # weights
     aw = asm.at
     if W == 16:
@@ -177,6 +192,11 @@ def table_part(impl, asm: Asm, flipmask, after_clamp=None) -> list[str]:
     return items
 
 
+def table_offsets(tab) -> list[int]:
+    """Entry index where each output's table starts."""
+    return [0, tab.stored(0).size]
+
+
 def output_acc(impl, asm: Asm, o: int) -> None:
     tab = impl.table
     g = tab.grid
@@ -184,8 +204,14 @@ def output_acc(impl, asm: Asm, o: int) -> None:
     B = tab.bits // 8
     at = asm.at
     skip = B - 2
-    if o == 1:
+    if o == 1 and tab.dep == ("xy", "xy"):
         asm.tblptr_add(g.n[0] * g.n[1] * B - (g.n[0] + 2) * B)
+    elif o == 1:
+        tsym = f"_{impl.problem.name}_tab"
+        k1 = table_offsets(tab)[1] * B
+        asm += [f"movlw LOW({tsym} + {k1})", f"addwf {at('r')}, W, B", f"movwf {TBLPTRL}, A",
+                f"movlw HIGH({tsym} + {k1})", f"addwfc {at('r', 1)}, W, B", f"movwf {TBLPTRH}, A",
+                f"movlw UPPER({tsym} + {k1})", f"movwf {TBLPTRU}, A", "movlw 0", f"addwfc {TBLPTRU}, F, A"]
     asm.read("e", B)
     if B == 4:
         asm += [f"clrf {at('a', i)}, B" for i in range(4)]
@@ -198,6 +224,15 @@ def output_acc(impl, asm: Asm, o: int) -> None:
     asm.read("d", 2, skip)
     asm += [f"movf {at('e', 0)}, W, B", f"subwf {at('d', 0)}, F, B", f"movf {at('e', 1)}, W, B",
             f"subwfb {at('d', 1)}, F, B"]
+    if tab.dep[o] == "y":
+        asm.mac("fy", W)
+        return combine(impl, asm, o)
+    if tab.dep[o] == "x":  # fx = a + w11 into the scratch t
+        asm += [f"movf {at('aw')}, W, B", f"addwf {at('w11')}, W, B", f"movwf {at('t')}, B"]
+        if W == 16:
+            asm += [f"movf {at('aw', 1)}, W, B", f"addwfc {at('w11', 1)}, W, B", f"movwf {at('t', 1)}, B"]
+        asm.mac("t", W)
+        return combine(impl, asm, o)
     asm.mac("aw", W)
     asm.tblptr_add(g.n[0] * B - 2 * B)
     asm.read("f", 2, skip)
@@ -208,6 +243,15 @@ def output_acc(impl, asm: Asm, o: int) -> None:
     asm += [f"movf {at('f', 0)}, W, B", f"subwf {at('d', 0)}, F, B", f"movf {at('f', 1)}, W, B",
             f"subwfb {at('d', 1)}, F, B"]
     asm.mac("w11", W)
+    combine(impl, asm, o)
+
+
+def combine(impl, asm: Asm, o: int) -> None:
+    """int32 entries: acc = e00 + (S >> W); then the odd output's negation."""
+    tab = impl.table
+    W = tab.grid.W
+    B = tab.bits // 8
+    at = asm.at
     if B == 4:  # acc = e00 + (S >> W)
         q = W // 8
         asm.sign_fill(at("a", 3), at("t"))

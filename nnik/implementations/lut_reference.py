@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
-from nnik.implementations.lut_table import Grid, Table, fold_plan
+from nnik.implementations.lut_table import Grid, Table, dependence, fold_plan
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -59,7 +59,13 @@ def reference_impl(cls, scenario: str, cfg: dict):
     if cfg["bits"] == 32:
         ent = ent * 3 + 70000
     offs = tuple(0 if odd[o].any() else 5 + 11 * o for o in range(2))
-    tab = Table(grid=grid, bits=cfg["bits"], fb=(8, 6), offset=offs, odd=odd, ent=ent.astype(np.int64))
+    dep = dependence(p, family == "lut" and cfg.get("separable", True))
+    for o in range(2):  # a 1-D output: replicated along the other axis
+        if dep[o] == "y":
+            ent[o] = ent[o][:, :1]
+        elif dep[o] == "x":
+            ent[o] = ent[o][:1, :]
+    tab = Table(grid=grid, bits=cfg["bits"], fb=(8, 6), offset=offs, odd=odd, ent=ent.astype(np.int64), dep=dep)
     full = {**cfg, "fit": "lsq"}
     if family == "lut":
         return cls(p, full, tab)

@@ -72,6 +72,57 @@ def fold_plan(problem, symmetry: bool) -> tuple[tuple[bool, bool], np.ndarray]:
     return fold, odd
 
 
+def dependence(problem, separable: bool) -> tuple[str, str]:
+    """Per output "xy" / "x" / "y" (cached on the problem); all "xy" unless `separable`."""
+    if not separable:
+        return ("xy", "xy")
+    dep = problem.cache.get("lut_dependence")
+    if dep is None:
+        dep = problem.cache["lut_dependence"] = tuple(detect_dependence(problem))
+    return dep
+
+
+
+def detect_dependence(problem, n: int = 4000, seed: int = 8) -> list[str]:
+    """Per output: "xy", or "x" / "y" when the exact IK does not change with the other input
+    (checked numerically at random pairs of integer points); measured data: "xy"."""
+    if not problem.analytic:
+        return ["xy", "xy"]
+    lo, hi = problem.lo, problem.hi
+    rng = np.random.default_rng(seed)
+    pts = rng.integers(lo, hi + 1, (n, 2))
+    q = problem.truth(pts)
+    tol = 1e-7 * (1.0 + np.ptp(q, axis=0))
+    dep = []
+    for o in range(2):
+        d = "xy"
+        for a, keep in ((0, "y"), (1, "x")):
+            m = pts.copy()
+            m[:, a] = rng.integers(lo[a], hi[a] + 1, n)
+            if np.max(np.abs(problem.truth(m)[:, o] - q[:, o])) <= tol[o]:
+                d = keep
+                break
+        dep.append(d)
+    return dep
+
+
+def merge_matrix(grid, dep: str):
+    """(nx*ny, n1) 0/1 matrix: node (iy, ix) -> its 1-D node (iy for "y", ix for "x")."""
+    import scipy.sparse as sp
+
+    nx, ny = grid.n
+    iy, ix = np.divmod(np.arange(nx * ny), nx)
+    col, n1 = (iy, ny) if dep == "y" else (ix, nx)
+    return sp.csr_matrix((np.ones(nx * ny), (np.arange(nx * ny), col)), shape=(nx * ny, n1))
+
+
+def _second_differences_1d(n: int):
+    import scipy.sparse as sp
+
+    if n < 3:
+        return sp.csr_matrix((0, n))
+    return sp.diags([1.0, -2.0, 1.0], [0, 1, 2], shape=(n - 2, n)).tocsr()
+
 
 @dataclass
 class Grid:
@@ -222,11 +273,13 @@ def choose_smooth(a, d, q, fixed, folds: int = 5, seed: int = 0) -> float:
 
 
 def fit_nodes(grid: Grid, t: np.ndarray, q: np.ndarray, odd: np.ndarray, method: str, measured: bool,
-              smooth: float | None = None) -> tuple[np.ndarray, dict]:
+              smooth: float | None = None, dep=("xy", "xy")) -> tuple[np.ndarray, dict]:
     """Node values (2, ny, nx) fitted to targets q (N, 2) at folded coordinates t (N, 2).
-    odd[o, a]: output o is odd in folded axis a, so its nodes at t_a = 0 are fixed to 0."""
-    a = grid.basis(t).tocsr()
-    d = second_differences(*grid.n)
+    odd[o, a]: output o is odd in folded axis a, so its nodes at t_a = 0 are fixed to 0.
+    dep[o] = "x" / "y": a 1-D table along that axis (the 2-D basis with its columns merged is
+    exactly the 1-D interpolation), replicated along the other axis."""
+    a2 = grid.basis(t).tocsr()
+    d2 = second_differences(*grid.n)
     nx, ny = grid.n
     vals = np.empty((2, ny, nx))
     info = {}
@@ -237,6 +290,12 @@ def fit_nodes(grid: Grid, t: np.ndarray, q: np.ndarray, odd: np.ndarray, method:
         if odd[o, 1]:
             fixed[0, :] = True
         fixed = fixed.ravel()
+        a, d, merge = a2, d2, None
+        if dep[o] in ("x", "y"):
+            merge = merge_matrix(grid, dep[o])
+            a = (a2 @ merge).tocsr()
+            d = _second_differences_1d(merge.shape[1])
+            fixed = (merge.T @ fixed.astype(float)) > 0
         if measured:
             lam = choose_smooth(a, d, q[:, o], fixed) if smooth is None else smooth
             info[f"smooth{o}"] = lam
@@ -248,7 +307,7 @@ def fit_nodes(grid: Grid, t: np.ndarray, q: np.ndarray, odd: np.ndarray, method:
             v = _solve_minimax(a, q[:, o], v, fixed)
         elif method != "lsq":
             raise NnikError(f"unknown fit method {method!r} (lsq | minimax)")
-        vals[o] = v.reshape(ny, nx)
+        vals[o] = (merge @ v if merge is not None else v).reshape(ny, nx)
     return vals, info
 
 
@@ -261,7 +320,13 @@ class Table:
     fb: tuple[int, int]  # fractional bits per output
     offset: tuple[int, int]  # per output, output units (added after the rounding shift)
     odd: np.ndarray  # (2, 2) bool: output o flips sign on the negative side of folded axis a
-    ent: np.ndarray  # (2, ny, nx) int64
+    ent: np.ndarray  # (2, ny, nx) int64 (a 1-D output's entries replicated along the other axis)
+    dep: tuple[str, str] = ("xy", "xy")  # per output: "xy", or a 1-D table along "x" / "y"
+
+    def stored(self, o: int) -> np.ndarray:
+        """The entries output o keeps in flash: [y][x], or one row/column for a 1-D table."""
+        e = self.ent[o]
+        return e[:, 0] if self.dep[o] == "y" else e[0, :] if self.dep[o] == "x" else e.ravel()
 
     @property
     def shift(self) -> tuple[int, int]:
@@ -270,7 +335,7 @@ class Table:
 
     @property
     def nbytes(self) -> int:
-        return int(self.ent.size * self.bits // 8)
+        return int(sum(self.stored(o).size for o in range(2)) * self.bits // 8)
 
     def acc(self, c: np.ndarray) -> np.ndarray:
         """Clamped inputs (N, 2) -> acc (N, 2) int64 (value 2^-s, before the offset)."""
@@ -296,7 +361,8 @@ class Table:
         return out
 
 
-def quantise(grid: Grid, vals: np.ndarray, bits: int, odd: np.ndarray, fb_force: int | None = None) -> Table:
+def quantise(grid: Grid, vals: np.ndarray, bits: int, odd: np.ndarray, fb_force: int | None = None,
+             dep=("xy", "xy")) -> Table:
     """Range analysis: the offset and the most fractional bits per output such that entries fit
     their type, every adjacent difference and every |e_ij - e00| fits int16 and
     |acc| + 2^(s-1) < 2^31. Raises NnikError when even fb = 0 (or the forced fb) overflows."""
@@ -322,7 +388,7 @@ def quantise(grid: Grid, vals: np.ndarray, bits: int, odd: np.ndarray, fb_force:
         ents.append(chosen[1])
         offs.append(off)
     return Table(grid=grid, bits=bits, fb=tuple(fbs), offset=tuple(offs), odd=np.asarray(odd, bool),
-                 ent=np.stack(ents))
+                 ent=np.stack(ents), dep=tuple(dep))
 
 
 def _fits(e: np.ndarray, bits: int, W: int, fb: int) -> bool:

@@ -13,7 +13,7 @@ from nnik.errors import NnikError
 from nnik.implementations import FAMILIES
 from nnik.implementations.accuracy import accuracy
 from nnik.implementations.lut import LutImpl
-from nnik.implementations.lut_table import detect_parity
+from nnik.implementations.lut_table import detect_dependence, detect_parity
 from nnik.implementations.verify import verify_host, verify_on_target
 
 from conftest import DATASETS, require_tool, write_toml
@@ -43,13 +43,41 @@ def test_no_symmetry_on_a_symmetric_domain_without_it(tmp_path):
     assert im.table.grid.fold == (False, False)
 
 
+def test_one_input_dependence_detected():
+    assert detect_dependence(problem("galvo_cba2012")) == ["y", "xy"]  # alpha = atan(y / z) / 2
+    assert detect_dependence(problem("galvo_dual_xy2")) == ["xy", "y"]
+    assert detect_dependence(problem("corexy_nonlinear")) == ["xy", "xy"]
+    assert detect_dependence(problem("corexy_measured")) == ["xy", "xy"]
+
+
+def test_one_dimensional_table_for_a_one_input_output():
+    p = problem("galvo_cba2012")
+    two = LutImpl.fit(p, {**GALVO_K14, "separable": False})
+    one = LutImpl.fit(p, GALVO_K14)
+    assert one.table.dep == ("y", "xy") and two.table.dep == ("xy", "xy")
+    assert one.model_bytes() == (8 + 64) * 2 < two.model_bytes()
+    assert np.all(one.table.ent[0] == one.table.ent[0][:, :1])  # constant along x
+    assert accuracy(one)["pre_max"] <= accuracy(two)["pre_max"] + 1e-3
+
+
+def test_one_dimensional_tables_along_x_and_y_equal_host_c(tmp_path):
+    # no shipped machine has an output that depends on x only: make one from the galvo's table
+    im = LutImpl.fit(problem("galvo_cba2012"), {**GALVO_K14, "W": 8})
+    t = im.table
+    t.ent[0] = np.repeat(t.ent[0][:1, :], t.ent.shape[1], axis=0)
+    t.ent[1] = np.repeat(t.ent[1][:, :1], t.ent.shape[2], axis=1)
+    t.dep = ("x", "y")
+    r = verify_host(im, tmp_path / "c", host_vectors(im.problem))
+    assert r["mismatches"] == 0
+
+
 def test_measured_data_has_no_symmetry():
     assert detect_parity(problem("corexy_measured")) == [[None, None], [None, None]]
 
 
 def test_quarter_table_and_its_accuracy():
-    full = LutImpl.fit(problem("galvo_cba2012"), {**GALVO_K14, "symmetry": False})
-    quarter = LutImpl.fit(problem("galvo_cba2012"), GALVO_K14)
+    full = LutImpl.fit(problem("galvo_cba2012"), {**GALVO_K14, "symmetry": False, "separable": False})
+    quarter = LutImpl.fit(problem("galvo_cba2012"), {**GALVO_K14, "separable": False})
     assert quarter.table.grid.fold == (True, True)
     assert quarter.model_bytes() * 3 < full.model_bytes()
     a = accuracy(quarter)
