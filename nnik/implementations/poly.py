@@ -66,7 +66,7 @@ class PolyImpl(Implementation):
     def ladder(cls, problem: Problem) -> list[dict]:
         """Total degree 1..7 (a degree whose symmetric term sets equal the previous one's is
         skipped); per degree, without and with the dropped-input-bits correction (when an input
-        shift drops bits); no split, the split of each output, of both; the split variants also
+        shift drops bits); no split, the split of each output, of both; from degree 3 each also
         with floor steps (3 AVR cycles a step cheaper). The fit is chosen per output ("best")."""
         sym = _symmetry(problem)
         maps = poly_fit.axis_maps(problem)
@@ -80,7 +80,7 @@ class PolyImpl(Implementation):
             seen.add(terms)
             for lsb in lsbs:
                 for sp in splits:
-                    for r in ((True,) if sp is False else (True, False)):
+                    for r in ((True,) if d < 3 else (True, False)):
                         out.append({"degree": d, "fit": "best", "coef_bits": 16, "split": sp, "trim": 4,
                                     "rounding": r, "lsb": lsb})
         return out

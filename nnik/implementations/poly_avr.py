@@ -78,7 +78,9 @@ def body(prog: Program, code_range, name: str) -> list[str] | None:
     def release(t):
         for name, last in list(uses.items()):
             if last == t and name in where:
-                free.insert(0, where.pop(name))
+                reg = where.pop(name)
+                if reg != "r22":
+                    free.insert(0, reg)
 
     def load(reg_lo: str, op) -> list[str]:
         if op in ("rx", "ry"):
@@ -102,6 +104,11 @@ def body(prog: Program, code_range, name: str) -> list[str] | None:
             elif st.L is not None:
                 asm += _add_const(["r22", "r23"], int(st.L))
             release(t)
+            nxt = events[t + 1] if t + 1 < len(events) else None
+            if (nxt and nxt[0] == "step" and uses.get(st.dst) == t + 1 and prog.steps[nxt[1]].a == st.dst
+                    and st.dst not in (prog.steps[nxt[1]].b, prog.steps[nxt[1]].L)):
+                where[st.dst] = "r22"  # forwarded: the next step takes it straight from the product
+                continue
             if not free:
                 return None
             dst = free.pop(0)

@@ -13,6 +13,7 @@ from nnik.implementations.c_common import i32
 
 OFF_D, OFF_P, OFF_O, OFF_R, OFF_H = 0, 8, 12, 20, 24
 PRODL, PRODH, WREG = "0xFF3", "0xFF4", "0xFE8"
+BANK_BYTES = 256
 
 
 class _Asm:
@@ -90,6 +91,9 @@ def p18_body(impl) -> str | None:
     for st in prog.steps:
         where[st.dst] = OFF_H + 2 * nv
         nv += 1
+
+    if OFF_H + 2 * nv > BANK_BYTES:
+        return None  # the work area must sit in one RAM bank: such a program uses the portable C
 
     def op(b):
         return where[b] if isinstance(b, str) else ("k", int(b))
