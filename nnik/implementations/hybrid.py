@@ -19,7 +19,7 @@ import numpy as np
 
 from nnik.errors import NnikError
 from nnik.implementations.c_common import i32
-from nnik.implementations.lut import LutImpl, cell_ladder, fit_points
+from nnik.implementations.lut import LutImpl, cell_exponents, cell_ladder, fit_points
 from nnik.implementations.lut_table import Grid, Table, fit_nodes, quantise
 from nnik.implementations.problem import Problem
 
@@ -61,11 +61,9 @@ class HybridImpl(LutImpl):
     @classmethod
     def fit(cls, problem: Problem, config: dict) -> "HybridImpl":
         cfg = {**DEFAULTS, **config, "symmetry": False}
-        if "k" not in cfg:
-            raise NnikError("hybrid config needs k = [kx, ky] (cell size exponents)")
         if cfg["base"] != "affine":
             raise NnikError(f"unknown hybrid base {cfg['base']!r} (affine)")
-        cfg["k"] = [int(v) for v in cfg["k"]]
+        cfg["k"] = cell_exponents(cfg)
         lo, hi = problem.lo, problem.hi
         span = (hi - lo).astype(np.float64)
         grid = Grid.make(lo, hi, cfg["k"], (False, False), int(cfg["W"]))

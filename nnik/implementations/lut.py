@@ -77,6 +77,18 @@ def k_for_nodes(span: int, nodes: int) -> int:
     return max(0, int(math.ceil(math.log2(max(1.0, span / max(1, nodes - 1))))))
 
 
+def cell_exponents(cfg: dict) -> list[int]:
+    """The config's k as two ints, or a one-line NnikError."""
+    if cfg.get("bits", 16) not in (16, 32):
+        raise NnikError(f"entry bits {cfg.get('bits')!r}: must be 16 or 32")
+    if cfg.get("W", 16) not in (8, 16):
+        raise NnikError(f"weight bits {cfg.get('W')!r}: must be 8 or 16")
+    k = cfg.get("k")
+    if not isinstance(k, (list, tuple)) or len(k) != 2 or not all(isinstance(v, (int, np.integer)) for v in k):
+        raise NnikError(f"table config needs k = [kx, ky], two integer cell size exponents (got {k!r})")
+    return [int(v) for v in k]
+
+
 def cell_ladder(span: list[int], first_nodes: int = 4, max_nodes: int = 40) -> list[list[int]]:
     """Cell exponents per axis, halving the cells from about `first_nodes` nodes per axis while
     no axis exceeds `max_nodes` nodes."""
@@ -118,9 +130,7 @@ class LutImpl(Implementation):
     @classmethod
     def fit(cls, problem: Problem, config: dict) -> "LutImpl":
         cfg = {**DEFAULTS, **config}
-        if "k" not in cfg:
-            raise NnikError("lut config needs k = [kx, ky] (cell size exponents)")
-        cfg["k"] = [int(v) for v in cfg["k"]]
+        cfg["k"] = cell_exponents(cfg)
         return cls(problem, cfg, build_table(problem, cfg))
 
     # ---- the integer model ------------------------------------------------------------------------

@@ -110,7 +110,9 @@ def test_range_analysis_rejects_an_overflowing_table():
 def test_bad_knobs_are_one_line_errors():
     p = problem("galvo_cba2012")
     for cfg, msg in (({"k": [14, 14], "W": 12}, "weight bits"), ({"k": [14, 14], "bits": 8}, "entry bits"),
-                     ({"k": [14, 14], "fit": "cubic"}, "fit method"), ({"k": [4, 4]}, "nodes")):
+                     ({"k": [14, 14], "fit": "cubic"}, "fit method"), ({"k": [4, 4]}, "nodes"),
+                     ({"k": 14}, "two integer"), ({}, "two integer"), ({"k": [14, "x"]}, "two integer"),
+                     ({"k": [14, 14], "bits": "16x"}, "entry bits")):
         with pytest.raises(NnikError, match=msg):
             LutImpl.fit(p, cfg)
 
