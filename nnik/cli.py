@@ -76,12 +76,14 @@ def print_selection(m: dict) -> None:
     t = Table(title=f"{m['name']}: every family's best for max_error {tg['max_error']:g} {unit} on {tg['chip']} "
                     f"(pre-rounding, {sel['check_points']} {sel['check_set']} points)")
     for col in ("family", "configuration", f"pre max ({unit})", "avr cycles", "pic18 cycles", "avr flash B",
-                "pic18 flash B", "bit-exact host/avr/pic18", "pick"):
+                "pic18 flash B", "bit-exact host/avr/pic18 (fast+portable)", "pick"):
         t.add_column(col, justify="left" if col in ("family", "configuration", "pick") else "right")
     for r in sel["implementations"]:
         cyc, fl = r.get("cycles", {}), r.get("flash_bytes", {})
-        checks = [r.get("host") or {}, *[r.get("targets", {}).get(k, {}) for k in ("avr", "pic18")]]
-        ok = "/".join("not run" if "not_run" in c else ("yes" if c.get("bit_exact") else "NO") for c in checks)
+        tg_ = r.get("targets", {})
+        checks = [[r.get("host") or {}], *[[tg_.get(k, {}), tg_.get(f"{k}_portable", {})] for k in ("avr", "pic18")]]
+        ok = "/".join("not run" if any("not_run" in c for c in cs) else
+                      ("yes" if all(c.get("bit_exact") for c in cs) else "NO") for cs in checks)
         meets = r["pre_max"] <= tg["max_error"]
         t.add_row(r["family"], r["describe"], f"{r['pre_max']:.4f}" + ("" if meets else " (misses)"),
                   *[f"{cyc[k]:.0f}" if cyc.get(k) is not None else "-" for k in ("avr", "pic18")],
@@ -103,7 +105,7 @@ def _warn_training(model) -> None:
     stop = getattr(model, "stopped_by", "budget")
     if stop != "budget":
         console.print(f"[bold yellow]warning:[/bold yellow] training stopped by the {stop.replace('_', '-')} cap "
-                      f"([training] max_seconds) before its iteration budget; the result depends on machine load "
+                      f"(\\[training] max_seconds) before its iteration budget; the result depends on machine load "
                       f"(recorded as training.stopped_by in metrics.json)")
 
 

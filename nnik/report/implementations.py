@@ -20,12 +20,16 @@ def _c_hash(ctx, family: str) -> str | None:
 
 
 def _check_cell(r: dict, where: str) -> str:
-    c = r.get("host") if where == "host" else lookup(r, "targets", where)
-    if not isinstance(c, dict):
+    """host, or a chip's fast and portable paths together."""
+    cs = [r.get("host")] if where == "host" else [lookup(r, "targets", where), lookup(r, "targets", f"{where}_portable")]
+    cs = [c for c in cs if isinstance(c, dict)]
+    if not cs:
         return "—"
-    if "not_run" in c:
+    if any("not_run" in c for c in cs):
         return "not run"
-    return "yes" if c.get("bit_exact") else f"NO ({c.get('mismatches')} mismatches)"
+    bad = sum(int(c.get("mismatches") or 0) for c in cs)
+    paths = " (fast + portable)" if len(cs) > 1 else ""
+    return ("yes" + paths) if all(c.get("bit_exact") for c in cs) else f"NO ({bad} mismatches)"
 
 
 def pick_sentence(sel: dict, unit: str) -> str:
