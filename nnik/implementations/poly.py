@@ -16,7 +16,12 @@ floor), ``coef_bits`` (16: int16 coefficients added after each shift; 32: int32
 coefficients added to the product before it, one rounding per step), ``split`` (bool or one per
 output: the last factor of an odd output is a constant plus a finer residual: one more product,
 more bits),
-``guard`` (extra headroom bits; when given, the range analysis must prove it as is).
+``lsb`` (the bits the input shift drops, 0 .. 2^k - 1, enter each output linearly with a fitted
+slope: one more product per input, and the int16 input no longer limits the accuracy), ``guard``
+(extra headroom bits; when given, the range analysis must prove it as is).
+
+A final product by a constant whose int16 rounding would cost more than ``CONST_TOL`` output
+units gets a second product with the constant's remainder (affine belt machines need it).
 """
 
 from __future__ import annotations
@@ -29,6 +34,7 @@ from nnik.implementations.problem import Problem
 from nnik.implementations import poly_fit, poly_int
 
 DEFAULTS = {"degree": 5, "fit": "best", "coef_bits": 16, "split": False, "trim": 4, "rounding": True, "lsb": False}
+LADDER_MAX_TERMS = 15  # beyond this the Horner chains cost more than any goal allows
 CONST_TOL = 1e-3  # output units: a final constant multiplier rounded worse than this gets a low part
 NEGLIGIBLE = 1e-6  # output units: a term smaller than this over the domain is dropped
 KNOBS = set(DEFAULTS) | {"degree_x", "degree_y", "guard"}
@@ -64,8 +70,8 @@ class PolyImpl(Implementation):
 
     @classmethod
     def ladder(cls, problem: Problem) -> list[dict]:
-        """Total degree 1..7 (a degree whose symmetric term sets equal the previous one's is
-        skipped); per degree, without and with the dropped-input-bits correction (when an input
+        """Total degree 1..7 (a degree whose symmetric term sets equal the previous one's, or with
+        more than LADDER_MAX_TERMS terms in an output, is skipped); per degree, without and with the dropped-input-bits correction (when an input
         shift drops bits); no split, the split of each output, of both; from degree 3 each also
         with floor steps (3 AVR cycles a step cheaper). The fit is chosen per output ("best")."""
         sym = _symmetry(problem)
@@ -75,7 +81,7 @@ class PolyImpl(Implementation):
         out, seen = [], set()
         for d in range(1, 8):
             terms = tuple(tuple(poly_fit.monomials(s, d)) for s in sym)
-            if terms in seen:
+            if terms in seen or max(len(t) for t in terms) > LADDER_MAX_TERMS:
                 continue
             seen.add(terms)
             for lsb in lsbs:

@@ -50,15 +50,22 @@ def _block(src: str, start: str, stop: str) -> list[str]:
     return part[:part.index(stop)].splitlines()[1:]
 
 
+def _count(lines: list[str], pattern: str, cycles, words) -> tuple[float, float]:
+    """Cycles and words of the instructions in the string literals `lines` (labels skipped)."""
+    cyc = wds = 0.0
+    for line in lines:
+        m = re.match(pattern, line)
+        if m and not m.group(1).endswith(":"):
+            op = m.group(1).split()[0]
+            cyc += cycles(op)
+            wds += words(op)
+    return cyc, wds
+
+
 def _avr_counts(src: str) -> dict:
-    cyc = words = 0.0
-    for line in _block(src, "__asm__ __volatile__ (", '            : "+r"'):
-        m = re.match(r'\s*"(.*)\\n\\t"\s*$', line)
-        if not m or m.group(1).endswith(":"):
-            continue
-        op = m.group(1).split()[0]
-        cyc += 2 if op in ("mul", "muls", "mulsu", "lds", "std") else (1.5 if op.startswith("br") else 1)
-        words += 2 if op == "lds" else 1
+    cyc, words = _count(_block(src, "__asm__ __volatile__ (", '            : "+r"'), r'\s*"(.*)\\n\\t"\s*$',
+                        lambda op: 2 if op in ("mul", "muls", "mulsu", "lds", "std") else (1.5 if op.startswith("br") else 1),
+                        lambda op: 2 if op == "lds" else 1)
     for k in re.findall(r"_ASR24\((?:x|y), (\d+)\);", src):
         cyc += 3 * int(k)  # the input shift in C: asr/ror/ror a bit
         words += 3 * int(k)
@@ -68,14 +75,9 @@ def _avr_counts(src: str) -> dict:
 
 
 def _p18_counts(src: str) -> dict:
-    cyc = words = 0.0
-    for line in _block(src, "    __asm__(", "    );"):
-        m = re.match(r'\s*"(?:\\t)?(.*)\\n"\s*$', line)
-        if not m or m.group(1).endswith(":"):
-            continue
-        op = m.group(1).split()[0]
-        cyc += 2 if op in ("movff", "bra") else (1.5 if op in ("btfss", "btfsc") else 1)
-        words += 2 if op == "movff" else 1
+    cyc, words = _count(_block(src, "    __asm__(", "    );"), r'\s*"(?:\\t)?(.*)\\n"\s*$',
+                        lambda op: 2 if op in ("movff", "bra") else (1.5 if op in ("btfss", "btfsc") else 1),
+                        lambda op: 2 if op == "movff" else 1)
     return {"asm_cycles": cyc, "asm_words": words}
 
 

@@ -124,6 +124,7 @@ def plan_output(coefs: dict, c00: float, shared: dict, split: bool, grid_env: di
     cmn = {((i - ax) // sx, (j - ay) // sy): c for (i, j), c in coefs.items() if c != 0.0}
     xs = "u^2" if sx == 2 else "u"
     ys = "v^2" if sy == 2 else "v"
+
     def term(a_node, cdict, build) -> list:
         """[(a_node, H)] with H built from cdict, or split: [(a_node, C1), (a_node, G)]."""
         h = build(cdict)
