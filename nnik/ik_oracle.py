@@ -10,14 +10,56 @@ import numpy as np
 IkFn = Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]
 
 
+def picked_implementation(outdir: Path):
+    """The implementation nnik run picked (refitted, and checked to emit exactly the C that
+    OUTDIR/c/NAME.c holds), or None when there is no pick or it takes inputs in a unit other than
+    1 um (the firmware passes whole micrometres)."""
+    import json
+
+    from nnik import pipeline
+    from nnik.c_hash import dir_hash, files_hash
+    from nnik.errors import NnikError
+    from nnik.implementations import FAMILIES
+
+    mpath = Path(outdir) / pipeline.METRICS_FILE
+    try:
+        sel = json.loads(mpath.read_text()).get("selection") or {}
+    except (OSError, ValueError, AttributeError):
+        return None
+    pick = sel.get("pick")
+    if not pick or sel.get("input_unit_um", 1.0) != 1.0 or pick.get("family") not in FAMILIES:
+        return None
+    key = (str(Path(outdir).resolve()), pick.get("model_hash"))
+    if key not in _PICKS:
+        problem = pipeline.problem_for(Path(outdir))
+        impl = FAMILIES[pick["family"]].fit(problem, pick["config"])
+        if impl.source_hash() != pick["model_hash"]:
+            raise NnikError("refitting the pick does not give the C nnik run exported; run `nnik run` again", str(outdir))
+        if dir_hash(Path(outdir) / pipeline.C_DIR, problem.name) != files_hash(impl.render_c()):
+            raise NnikError(f"c/{problem.name}.c or .h changed since nnik run picked it; run `nnik run` again",
+                            str(outdir))
+        _PICKS[key] = impl
+    return _PICKS[key]
+
+
+_PICKS: dict = {}
+
+
 def ik_oracle(outdir: Path) -> IkFn:
     """in_um (N, 2) int64 -> (out (N, 2) int64 actuator units, flags (N,) int64: 1 if clamped).
 
-    Today c/NAME.c is the MLP of the scenario's kernel, so its integer model answers."""
+    The pick's integer model when nnik run picked one (c/NAME.c), else the MLP of the scenario's
+    kernel (c/mlp/NAME.c)."""
     from nnik import pipeline
 
-    model = pipeline.TrainedModel.load(Path(outdir) / pipeline.MODEL_FILE)
-    ds = pipeline.Dataset.load(Path(outdir) / pipeline.DATA_FILE)
+    impl = picked_implementation(outdir)
+    if impl is not None:
+        def ik(in_um: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+            r = impl.run(np.asarray(in_um, dtype=np.int64).reshape(-1, 2))
+            return r.out, r.flags
+
+        return ik
+    model, ds = pipeline.load_pair(Path(outdir))
     im = pipeline.quantize_kernel(model, ds, model.scenario.export["kernel"])
 
     def ik(in_um: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -28,12 +70,14 @@ def ik_oracle(outdir: Path) -> IkFn:
 
 
 def ik_sources(outdir: Path, name: str) -> Path:
-    """The directory whose NAME.c/NAME.h ik_oracle() answers for: the MLP pipeline's C
-    (OUTDIR/c/mlp/) where it exists, else OUTDIR/c/."""
+    """The directory whose NAME.c/NAME.h ik_oracle() answers for: OUTDIR/c/ when it holds the
+    pick, else the MLP pipeline's C (OUTDIR/c/mlp/)."""
     from nnik import pipeline
     from nnik.errors import NnikError
 
-    for d in (Path(outdir) / getattr(pipeline, "MLP_DIR", pipeline.C_DIR), Path(outdir) / pipeline.C_DIR):
+    dirs = [Path(outdir) / pipeline.C_DIR] if picked_implementation(outdir) is not None else []
+    dirs.append(Path(outdir) / pipeline.MLP_DIR)
+    for d in dirs:
         if (d / f"{name}.c").is_file() and (d / f"{name}.h").is_file():
             return d
     raise NnikError(f"no generated C {name}.c (run `nnik export {outdir}` first)", str(outdir))
