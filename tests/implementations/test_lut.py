@@ -179,3 +179,28 @@ def test_bit_exact_on_the_chip_fast_and_portable(tmp_path, target, tool):
     assert fast["cycles"] < (420 if target == "avr" else 1200)  # the issue's goals
     est = im.estimate(target)["cycles"]
     assert abs(est - fast["cycles"]) <= 0.03 * fast["cycles"]
+
+
+def _small_galvo(tmp_path):
+    # x not symmetric (no x fold), y symmetric (y fold); a few mm, so cells of 2^5..2^8 um
+    text = (DATASETS / "galvo_cba2012.toml").read_text()
+    text = text.replace("x_mm = [-100.0, 100.0]", "x_mm = [-3.0, 2.0]").replace("y_mm = [-100.0, 100.0]",
+                                                                               "y_mm = [-2.0, 2.0]")
+    return problem_from(write_toml(tmp_path, text))
+
+
+@pytest.mark.parametrize("target,tool", [("avr", "simavr"), ("pic18", "gpsim")])
+def test_edge_geometries_bit_exact_on_the_chip(tmp_path, target, tool):
+    """Small cells (byte-move index alignment), huge cells (right-shift alignment), one folded
+    axis of two, int32 entries with an 8-bit fraction."""
+    require_tool(tool)
+    small = _small_galvo(tmp_path)
+    cases = [(small, {"k": [7, 5], "W": 8}), (small, {"k": [6, 8], "W": 16, "bits": 32}),
+             (problem("hbot_unicamp"), {"k": [18, 17], "bits": 32, "W": 8})]
+    for i, (p, cfg) in enumerate(cases):
+        im = LutImpl.fit(p, cfg)
+        if p is small:
+            assert im.table.grid.fold == (False, True)
+        assert verify_host(im, tmp_path / f"c{i}")["mismatches"] == 0
+        r = verify_on_target(im, target, tmp_path / f"c{i}", tmp_path / f"w{i}", n_inside=30)
+        assert r["mismatches"] == 0, (cfg, r)
