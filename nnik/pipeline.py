@@ -14,7 +14,7 @@ from nnik.errors import NnikError
 from nnik.evaluate import error_stats, position_error_um, relative_pct
 from nnik.onnx_export import ONNX_TOLERANCE, check_onnx, export_onnx
 from nnik.scenario import Scenario
-from nnik.train import TrainedModel, train_model
+from nnik.train import MAX_FIT_ROWS, TrainedModel, train_model
 
 DATA_FILE = "data.npz"
 MODEL_FILE = "model.pt"
@@ -96,7 +96,8 @@ def evaluate(outdir: Path) -> dict:
         "training": {"stopped_by": model.stopped_by, "seconds": model.train_seconds,
                      "max_seconds": scn.training["max_seconds"],
                      "restarts_run": len({h["restart"] for h in model.history}),
-                     "lbfgs_rounds_run": sum(h["phase"] == "lbfgs" for h in model.history)},
+                     "lbfgs_rounds_run": sum(h["phase"] == "lbfgs" for h in model.history),
+                     "rows_fitted": min(int(len(ds.p["train"])), MAX_FIT_ROWS)},
     }
     pos = position_error_um(scn, pred, p)
     if pos is not None:

@@ -32,40 +32,67 @@ def _read_text(path: Path) -> str:
                         "(save the CSV as UTF-8 or plain ASCII)", str(path), f"line {line}") from None
 
 
+_READ_CACHE: dict = {}  # (path, size, mtime) -> arrays: every stage reloads the scenario, the CSV once
+
+
 def read_measurements(path: Path) -> tuple[np.ndarray, np.ndarray]:
     """Read the calibration CSV -> (positions in mm (N, 2), motor commands in actuator units (N, 2))."""
     src = str(path)
     if not path.is_file():
         raise NnikError("file not found", src)
-    reader = csv.reader(io.StringIO(_read_text(path), newline=""))
-    rows = []
+    st = path.stat()
+    key = (str(path.resolve()), st.st_size, st.st_mtime_ns)
+    if key not in _READ_CACHE:
+        _READ_CACHE.clear()
+        _READ_CACHE[key] = _parse_measurements(path)
+    p_mm, q = _READ_CACHE[key]
+    return p_mm.copy(), q.copy()
+
+
+def _parse_measurements(path: Path) -> tuple[np.ndarray, np.ndarray]:
+    src = str(path)
+    text = _read_text(path)
+    reader = csv.reader(io.StringIO(text, newline=""))
+    check_fields = max(map(len, text.splitlines()), default=0) > MAX_FIELD
+    lines, rows = [], []
     start = 1  # the line the row being read starts on (a quoted field may span lines)
     try:
         for row in reader:
             if row and not (len(row) == 1 and not row[0].strip()):
-                if any(len(v) > MAX_FIELD for v in row):
+                if check_fields and any(len(v) > MAX_FIELD for v in row):
                     raise NnikError(f"a field of {max(map(len, row))} characters (a number needs at most {MAX_FIELD})",
                                     src, f"line {start}")
-                rows.append((start, row))
+                lines.append(start)
+                rows.append(row)
             start = reader.line_num + 1
     except csv.Error as exc:
         raise NnikError(f"malformed CSV ({exc})", src, f"line {start}") from None
     if not rows:
         raise NnikError("empty CSV (expected a header x_um,y_um,q1,q2 and data rows)", src)
-    header = tuple(c.strip() for c in rows[0][1])
+    header = tuple(c.strip() for c in rows[0])
     if header != COLUMNS:
         shown = ",".join(header).encode("ascii", "backslashreplace").decode()
         raise NnikError(f"header must be {','.join(COLUMNS)}, got {shown}", src, "line 1")
-    data = np.empty((len(rows) - 1, len(COLUMNS)))
-    for k, (lineno, row) in enumerate(rows[1:]):
-        if len(row) != len(COLUMNS):
-            raise NnikError(f"expected {len(COLUMNS)} values, got {len(row)}", src, f"line {lineno}")
-        try:
-            data[k] = [float(v) for v in row]
-        except ValueError:
-            raise NnikError(f"not a number in {row!r}", src, f"line {lineno}") from None
-        if not np.all(np.isfinite(data[k])):
-            raise NnikError(f"NaN or infinite value in {row!r}", src, f"line {lineno}")
+    lines, rows = lines[1:], rows[1:]
+    widths = np.fromiter(map(len, rows), dtype=np.int64, count=len(rows))
+    if np.any(widths != len(COLUMNS)):
+        k = int(np.argmax(widths != len(COLUMNS)))
+        raise NnikError(f"expected {len(COLUMNS)} values, got {widths[k]}", src, f"line {lines[k]}")
+    try:
+        data = np.array(rows, dtype=np.float64).reshape(-1, len(COLUMNS))  # fast path, in C
+    except ValueError:
+        data = None
+    if data is None:
+        for lineno, row in zip(lines, rows):  # find the line that does not parse
+            try:
+                [float(v) for v in row]
+            except ValueError:
+                raise NnikError(f"not a number in {row!r}", src, f"line {lineno}") from None
+        data = np.array([[float(v) for v in row] for row in rows], dtype=np.float64).reshape(-1, len(COLUMNS))
+    bad = ~np.isfinite(data).all(axis=1)
+    if bad.any():
+        k = int(np.argmax(bad))
+        raise NnikError(f"NaN or infinite value in {rows[k]!r}", src, f"line {lines[k]}")
     if len(data) < MIN_ROWS:
         raise NnikError(f"only {len(data)} data rows; need at least {MIN_ROWS}", src)
     return data[:, :2] / 1000.0, data[:, 2:]
@@ -74,9 +101,11 @@ def read_measurements(path: Path) -> tuple[np.ndarray, np.ndarray]:
 def merge_duplicates(p_mm: np.ndarray, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, int]:
     """One row per distinct position (commands averaged), so that no position sits in both the
     training and the held-out rows. Returns (positions, commands, rows merged away)."""
-    uniq, first, inverse = np.unique(p_mm, axis=0, return_index=True, return_inverse=True)
-    if len(uniq) == len(p_mm):
+    order = np.lexsort((p_mm[:, 1], p_mm[:, 0]))
+    ps = p_mm[order]
+    if not np.any(np.all(ps[1:] == ps[:-1], axis=1)):  # the usual case, without np.unique's cost
         return p_mm, q, 0
+    uniq, first, inverse = np.unique(p_mm, axis=0, return_index=True, return_inverse=True)
     rank = np.empty(len(uniq), dtype=np.int64)
     rank[np.argsort(first)] = np.arange(len(uniq))  # keep the file's order of first appearance
     group = rank[inverse.reshape(-1)]
