@@ -3,14 +3,15 @@ residual in a ``lut`` table (:mod:`nnik.implementations.lut_table`). The residua
 the table's int16 entries carry many more fractional bits than a full table's.
 
 Integer contract (per output o; tx = x - lo_x, ty = y - lo_y after the clamp, unsigned):
-    base = C + Ax tx + Ay ty               int32, Q``G`` (Ax, Ay int16; |base| < 2^31)
+    base = C + Ax tx + Ay ty               int32, Q``G`` (|Ax|, |Ay| < 2^coef_bits; |base| < 2^31)
     acc  = the residual table's accumulator, Q``s_t``
     total = base + (acc >> (s_t - G))      (or acc 2^(G - s_t) when s_t < G)
     out = offset + ((total + 2^(G-1)) >> G), then the DAC clamp; pre = offset + total / 2^G.
 The table is fitted to the exact residual q - offset - base / 2^G of the quantised base.
 
 Knobs: ``k``, ``bits``, ``W``, ``fit`` as in ``lut`` (the table never folds: the base has no
-symmetry), ``base`` = "affine".
+symmetry), ``base`` = "affine", ``coef_bits`` = 16 | 8: the width of |Ax|, |Ay| (8 halves the
+base's multiplies; the coarser slope is a linear ramp the residual table absorbs exactly).
 """
 
 from __future__ import annotations
@@ -23,8 +24,7 @@ from nnik.implementations.lut import LutImpl, cell_exponents, cell_ladder, fit_p
 from nnik.implementations.lut_table import Grid, Table, fit_nodes, quantise
 from nnik.implementations.problem import Problem
 
-DEFAULTS = {"bits": 16, "W": 16, "fit": "lsq", "base": "affine"}
-A_MAX = 32767
+DEFAULTS = {"bits": 16, "W": 16, "fit": "lsq", "base": "affine", "coef_bits": 16}
 
 
 def affine_lsq(t: np.ndarray, q: np.ndarray) -> np.ndarray:
@@ -48,14 +48,16 @@ class HybridImpl(LutImpl):
     @classmethod
     def ladder(cls, problem: Problem) -> list[dict]:
         """Residual tables with cells halving from about 4 to at most 40 nodes per axis: an
-        8-bit cell fraction (fastest) and Q16 (minimax nodes up to 14 per axis)."""
+        8-bit cell fraction with 8-bit base slopes (fastest) and Q16 with 16-bit slopes (minimax
+        nodes up to 14 per axis)."""
         span = [int(problem.hi[a] - problem.lo[a]) for a in range(2)]
         out = []
         for k in cell_ladder(span):
             # minimax only on exact samples of small tables (on measured rows it fits the noise)
             small = problem.analytic and max((span[a] >> k[a]) + 2 for a in range(2)) <= 14
-            out += [{"k": k, "bits": 16, "W": 8, "fit": "lsq", "base": "affine"},
-                    {"k": k, "bits": 16, "W": 16, "fit": "minimax" if small else "lsq", "base": "affine"}]
+            out += [{"k": k, "bits": 16, "W": 8, "fit": "lsq", "base": "affine", "coef_bits": 8},
+                    {"k": k, "bits": 16, "W": 16, "fit": "minimax" if small else "lsq", "base": "affine",
+                     "coef_bits": 16}]
         return out
 
     @classmethod
@@ -63,6 +65,9 @@ class HybridImpl(LutImpl):
         cfg = {**DEFAULTS, **config, "symmetry": False}
         if cfg["base"] != "affine":
             raise NnikError(f"unknown hybrid base {cfg['base']!r} (affine)")
+        if cfg["coef_bits"] not in (8, 16):
+            raise NnikError(f"hybrid coef_bits {cfg['coef_bits']!r}: must be 8 or 16")
+        a_max = (1 << cfg["coef_bits"]) - 1  # |A|: 8 bits halves the base's multiplies
         cfg["k"] = cell_exponents(cfg)
         lo, hi = problem.lo, problem.hi
         span = (hi - lo).astype(np.float64)
@@ -81,7 +86,7 @@ class HybridImpl(LutImpl):
             for gg in range(24, -1, -1):
                 A = np.rint(np.array([ax, ay]) * 2.0**gg)
                 C = np.rint(c * 2.0**gg)
-                if np.abs(A).max() > A_MAX:
+                if np.abs(A).max() > a_max:
                     continue
                 if abs(C) + np.abs(A) @ span + amp * 2.0**gg + 2.0**gg < 2.0**30:
                     g = gg

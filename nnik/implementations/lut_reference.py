@@ -70,7 +70,8 @@ def reference_impl(cls, scenario: str, cfg: dict):
     if family == "lut":
         return cls(p, full, tab)
     tab.offset = (0, 0)
-    base = np.array([[12345 << 4, 211, -187], [-777 << 4, -95, 250]], dtype=np.int64)
+    wide = 10 if cfg["W"] == 16 else 1  # 16-bit and 8-bit base slopes
+    base = np.array([[12345 << 4, 211 * wide, -187 * wide], [-777 << 4, -95 * wide, 250 * wide]], dtype=np.int64)
     return cls(p, {**full, "base": "affine"}, tab, base, np.array([12, 13]), np.array([100, -40]))
 
 

@@ -52,6 +52,7 @@ def test_measured_rows():
 @pytest.mark.parametrize("scenario,cfg", [
     ("corexy_nonlinear", COREXY),
     ("corexy_nonlinear", {"k": [15, 15], "bits": 32, "W": 8}),
+    ("corexy_nonlinear", {"k": [14, 14], "bits": 16, "W": 8, "coef_bits": 8}),
     ("galvo_dual_xy2", {"k": [15, 15], "bits": 16}),  # DAC clamp
     ("corexy_measured", {"k": [15, 15], "bits": 16}),
 ])
@@ -66,6 +67,24 @@ def test_integer_model_equals_host_c(tmp_path, scenario, cfg):
 def test_range_analysis_rejects_overflow():
     with pytest.raises(NnikError, match="overflows"):
         HybridImpl.fit(problem("corexy_nonlinear"), {**COREXY, "fb": 15})
+
+
+def test_eight_bit_slopes_halve_the_base_multiplies():
+    from nnik.implementations.lut_c import table_ctx
+
+    p = problem("corexy_nonlinear")
+    wide = HybridImpl.fit(p, {"k": [14, 14], "W": 8, "coef_bits": 16})
+    narrow = HybridImpl.fit(p, {"k": [14, 14], "W": 8, "coef_bits": 8})
+    assert np.abs(narrow.base[:, 1:]).max() < 256 <= np.abs(wide.base[:, 1:]).max()
+
+    def muls(im):
+        return sum(ln.split()[0] == "mul" for ln in im.avr_lines(table_ctx(p, im.table)))
+
+    assert muls(wide) - muls(narrow) >= 10
+    # the coarser slope is a linear ramp the residual table carries: accuracy barely moves
+    assert accuracy(narrow)["pre_max"] < accuracy(wide)["pre_max"] + 0.02
+    with pytest.raises(NnikError, match="coef_bits"):
+        HybridImpl.fit(p, {"k": [14, 14], "coef_bits": 12})
 
 
 def test_unknown_base():
