@@ -19,6 +19,7 @@ F = ("r24", "r25")
 E = ("r14", "r15", "r10", "r11")
 AW, FY, W11 = ("r2", "r3"), ("r4", "r5"), ("r6", "r7")
 ZERO, NEG = "r8", "r9"
+PAIR_OPS = ("movw", "adiw", "sbiw")  # rN names rN+1:rN
 
 
 def _macsu(W: int, u) -> list[str]:
@@ -227,8 +228,14 @@ def finish(o: int, shift: int, offset: int, code_range) -> list[str]:
 
 def clobbers(lines: list[str]) -> list[str]:
     """The registers the assembly writes or reads (r24 is the flag operand, r26-r31 X and Z
-    operands, r1 is restored): gcc saves and restores the call-saved ones among them."""
-    used = {int(r) for ln in lines for r in re.findall(r"\br(\d+)\b", ln)}
+    operands, r1 is restored): gcc saves and restores the call-saved ones among them. A pair
+    instruction (movw, adiw, sbiw) names only the low register of each pair it touches."""
+    used = set()
+    for ln in lines:
+        regs = [int(r) for r in re.findall(r"\br(\d+)\b", ln)]
+        used.update(regs)
+        if ln.split()[:1] and ln.split()[0] in PAIR_OPS:
+            used.update(r + 1 for r in regs)
     regs = sorted(r for r in used if r not in (1, 24) and r < 26)
     return [f"r{r}" for r in regs] + ["memory"]
 
