@@ -67,6 +67,8 @@ def parse_simavr_output(text: str, n: int, n_out: int):
     cal = re.search(rf"@@C ({_HEX}) ({_HEX})", clean)
     if not cal:
         raise TargetError("simavr: harness produced no calibration line (program did not start?)")
+    if len(re.findall(rf"@@C {_HEX}", clean)) > 1:
+        raise TargetError("simavr: the harness started twice (the chip reset during the batch)")
     if not re.search(rf"@@E {_HEX}", clean):
         raise TargetError("simavr: harness did not reach the end marker (crash or reset?)")
     pat = re.compile(r"@@V ({h})((?: {h}){{{k}}})".format(h=_HEX, k=n_out + 2))

@@ -1,4 +1,4 @@
-"""The PIC18 watchdog is off in the harness, and any reset is an error (issue 11, section 1)."""
+"""The PIC18 watchdog is off in the harness, and a reset on either chip is an error (issue 11, section 1)."""
 
 from __future__ import annotations
 
@@ -49,3 +49,14 @@ def test_session_parses():
 def test_reset_is_an_error(text):
     with pytest.raises(TargetError, match="the chip reset during vector 0"):
         parse_gpsim_output(_session(text), 1, 2)
+
+
+def test_avr_restart_is_an_error():
+    """On the AVR a reset shows as the harness's start-up line twice."""
+    from nnik.targets.avr import parse_simavr_output
+
+    one = "@@C 00000010 00000020\n@@V 00000000 00000001 00000002 00000000 00000064\n@@E 00000001\n"
+    out, flags, cycles, _ = parse_simavr_output(one, 1, 2)
+    assert out.tolist() == [[1, 2]] and cycles.tolist() == [100]
+    with pytest.raises(TargetError, match="started twice"):
+        parse_simavr_output(one.replace("@@E", "@@C 00000010 00000020\n@@E"), 1, 2)
