@@ -29,6 +29,7 @@ from nnik.scenario import Scenario
 
 CHECK_GRID = 1001  # dense check grid per axis (inclusive of both edges)
 EDGE_POINTS = 4001  # points along each domain edge
+MAX_FIT_ROWS = 50_000  # measured rows a family fits on (a fixed random subset beyond this)
 
 
 def domain_units(scn: Scenario, unit_um: float) -> tuple[np.ndarray, np.ndarray]:
@@ -139,6 +140,9 @@ class Problem:
         if not self.analytic:
             p = np.concatenate([ds.p["train"], ds.p["val"]])
             q = np.concatenate([ds.q["train"], ds.q["val"]])
+            if len(p) > MAX_FIT_ROWS:  # a fixed subset: families fit in seconds on 10^6-row CSVs
+                keep = np.sort(np.random.default_rng(0).choice(len(p), MAX_FIT_ROWS, replace=False))
+                p, q = p[keep], q[keep]
             return p * (1000.0 / self.unit_um), q
         key = ("fit", n_per_axis)
         if key not in self.cache:
