@@ -109,6 +109,14 @@ def test_the_c_clamps_the_dac(tmp_path):
     r = im.run(p.check[0])
     assert r.pre.max() > hi_code + 1 and r.out.max() == hi_code and r.out.min() == lo_code
     assert verify_host(im, tmp_path / "c", vectors=host_vectors(p, n=20_000))["bit_exact"]
+    # the fast paths clamp in their own code (AVR: in the assembly); corners are where it bites
+    corners = np.array([[a, b] for a in (p.lo[0], p.hi[0], 0) for b in (p.lo[1], p.hi[1], 0)], dtype=np.int64)
+    vec = np.concatenate([np.random.default_rng(5).integers(p.lo, p.hi + 1, (40, 2)), corners])
+    assert (im.run(vec).out == hi_code).any()
+    for target, tool in (("avr", "simavr"), ("pic18", "gpsim")):
+        require_tool(tool)
+        res = verify_on_target(im, target, tmp_path / "c", tmp_path / target, vectors=vec)
+        assert res["bit_exact"], res
 
 
 @pytest.mark.parametrize("name, cfg, bound", [
