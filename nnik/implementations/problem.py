@@ -10,9 +10,9 @@ A :class:`Problem` is built once per scenario. It fixes
   a DAC clamped to its code range;
 * the data a family may fit on (``fit_in``/``fit_q``: dense exact samples for an analytic
   mechanism, the training rows for measured data);
-* the check set its accuracy is judged on (``check_in``/``check_q``): a dense grid of at least
-  1001 x 1001 input points plus the domain's edges and corners, labelled with the exact IK, or the
-  held-out rows of measured data.
+* the check set its accuracy is judged on (``check``): a dense grid of 1001 x 1001 input points,
+  4001 points along each edge, the corners and 200,000 random integer points, labelled with the
+  exact IK, or the held-out rows of measured data.
 
 Accuracy is always pre-rounding ``max |pre - truth|`` in output units on the check set.
 """
@@ -29,6 +29,8 @@ from nnik.scenario import Scenario
 
 CHECK_GRID = 1001  # dense check grid per axis (inclusive of both edges)
 EDGE_POINTS = 4001  # points along each domain edge
+CHECK_RANDOM = 200_000  # random integer points checked besides the grid
+CHECK_SEED = 20261123  # their seed: no family fits on them
 MAX_FIT_ROWS = 50_000  # measured rows a family fits on (a fixed random subset beyond this)
 
 
@@ -125,7 +127,10 @@ class Problem:
     def check(self) -> tuple[np.ndarray, np.ndarray]:
         """(inputs int64 (M, 2), truth (M, 2)): the dense grid, or the held-out rows."""
         if self.analytic:
-            pts = dense_grid(self.lo, self.hi)
+            # the grid's regular spacing can miss the worst residues of the input quantisation,
+            # so random integer points are checked too
+            rnd = np.random.default_rng(CHECK_SEED).integers(self.lo, self.hi + 1, (CHECK_RANDOM, 2))
+            pts = np.concatenate([dense_grid(self.lo, self.hi), rnd])
             return pts, self.truth(pts)
         ds = self.dataset
         pts = self.to_units(ds.p["test"])
