@@ -9,7 +9,7 @@ configurations. ``nnik/calibration/poly.json`` holds the fit, keyed to the hash 
 references emit; ``validated`` says a separate validation set was predicted within 3 % and the
 references still emit the same C.
 
-    python -m nnik.implementations.poly_cost   # re-measure and rewrite the calibration
+    python -m nnik.implementations.poly_calibrate   # re-measure and rewrite the calibration
 """
 
 from __future__ import annotations
@@ -105,11 +105,11 @@ def _calibration() -> dict | None:
     return _STATE["cal"]
 
 
-def _refs_unchanged(cal: dict) -> bool:
+def _refs_unchanged(cal: dict, impl_cls) -> bool:
     """The reference configurations still emit the C the calibration measured."""
     if "refs_ok" not in _STATE:
         try:
-            _STATE["refs_ok"] = reference_key() == cal.get("key")
+            _STATE["refs_ok"] = reference_key(impl_cls) == cal.get("key")
         except Exception:  # noqa: BLE001 - a scenario that no longer builds means "not validated"
             _STATE["refs_ok"] = False
     return _STATE["refs_ok"]
@@ -134,14 +134,15 @@ def estimate(impl, target: str) -> dict:
     flash = _predict(t["flash"], c, FLASH_FEATURES[target])
     ram = 0 if target == "avr" else 24 + 2 * len(impl.prog.steps)
     return {"cycles": cyc, "flash_bytes": int(round(flash)), "ram_bytes": ram,
-            "validated": bool(cal.get("validated")) and _refs_unchanged(cal)}
+            "validated": bool(cal.get("validated")) and _refs_unchanged(cal, type(impl))}
 
 
-# ---- calibration ---------------------------------------------------------------------------------
+# ---- the reference configurations (the calibration's key) ---------------------------------------
 
-def _impl(scn_name: str, unit, config: dict):
+def reference_impl(impl_cls, scn_name: str, unit, config: dict):
+    """One reference configuration fitted by ``impl_cls`` (PolyImpl; passed in, so this module
+    does not import the family it serves)."""
     from nnik.data import build_dataset
-    from nnik.implementations.poly import PolyImpl
     from nnik.implementations.problem import Problem
     from nnik.scenario import load_scenario
 
@@ -149,60 +150,12 @@ def _impl(scn_name: str, unit, config: dict):
     if key not in _STATE.setdefault("problems", {}):
         scn = load_scenario(ROOT / "datasets" / f"{scn_name}.toml")
         _STATE["problems"][key] = Problem(scn, build_dataset(scn), unit_um=unit or scn.export.get("input_unit_um", 1.0))
-    return PolyImpl.fit(_STATE["problems"][key], config)
+    return impl_cls.fit(_STATE["problems"][key], config)
 
 
-def reference_key() -> str:
+def reference_key(impl_cls) -> str:
+    """Hash of the C the reference configurations emit: the calibration holds while it matches."""
     h = hashlib.sha256()
     for name, unit, cfg in REFERENCE:
-        h.update(_impl(name, unit, cfg).render_source().encode())
+        h.update(reference_impl(impl_cls, name, unit, cfg).render_source().encode())
     return h.hexdigest()[:16]
-
-
-def _measure(impl, target: str, workdir: Path) -> dict:
-    from nnik.implementations.verify import verify_on_target
-
-    r = verify_on_target(impl, target, workdir / "c", workdir / target, n_inside=64)
-    if r.get("mismatches"):
-        raise RuntimeError(f"{impl.describe()}: {r['mismatches']} mismatches on {target}")
-    return r
-
-
-def calibrate(workdir: Path, out: Path = CALIBRATION) -> dict:
-    from tqdm import tqdm
-
-    rows = {"ref": [], "val": []}
-    for kind, lst in (("ref", REFERENCE), ("val", VALIDATION)):
-        for i, (name, unit, cfg) in enumerate(tqdm(lst, desc=f"poly {kind}")):
-            im = _impl(name, unit, cfg)
-            row = {"scenario": name, "unit": unit, "config": cfg, "c_hash": im.source_hash()}
-            for t in FEATURES:
-                r = _measure(im, t, workdir / f"{kind}{i}")
-                row[t] = {"cycles": r["cycles"], "flash_bytes": r["flash_bytes"], **counts(im, t)}
-            rows[kind].append(row)
-    targets, worst = {}, 0.0
-    for t in FEATURES:
-        def fit(feats, y_key):
-            x = np.array([[1.0] + [r[t][f] for f in feats] for r in rows["ref"]])
-            y = np.array([r[t][y_key] for r in rows["ref"]])
-            return np.linalg.lstsq(x, y, rcond=None)[0].tolist()
-        targets[t] = {"cycles": fit(FEATURES[t], "cycles"), "flash": fit(FLASH_FEATURES[t], "flash_bytes")}
-        for r in rows["val"]:
-            pred = _predict(targets[t]["cycles"], r[t], FEATURES[t])
-            r[t]["predicted_cycles"] = pred
-            r[t]["rel_error"] = abs(pred - r[t]["cycles"]) / r[t]["cycles"]
-            r[t]["predicted_flash"] = _predict(targets[t]["flash"], r[t], FLASH_FEATURES[t])
-            worst = max(worst, r[t]["rel_error"])
-    cal = {"key": reference_key(), "targets": targets, "reference": rows["ref"], "validation": rows["val"],
-           "max_validation_error": worst, "tolerance": TOLERANCE, "validated": worst <= TOLERANCE}
-    out.write_text(json.dumps(cal, indent=1) + "\n")
-    _STATE.pop("cal", None)
-    return cal
-
-
-if __name__ == "__main__":
-    import tempfile
-
-    with tempfile.TemporaryDirectory() as tmp:
-        res = calibrate(Path(tmp))
-    print(f"validated: {res['validated']} (worst validation error {100 * res['max_validation_error']:.2f} %)")

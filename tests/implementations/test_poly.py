@@ -150,9 +150,10 @@ def test_bit_exact_on_the_simulated_chips(tmp_path, target, tool, name, cfg):
 
 def test_calibration_matches_the_emitted_c():
     from nnik.implementations import poly_cost
+    from nnik.implementations.poly import PolyImpl
 
     cal = json.loads(poly_cost.CALIBRATION.read_text())
-    assert cal["key"] == poly_cost.reference_key(), "poly C changed: run python -m nnik.implementations.poly_cost"
+    assert cal["key"] == poly_cost.reference_key(PolyImpl), "poly C changed: run python -m nnik.implementations.poly_calibrate"
     im = PolyImpl.fit(problem("galvo_cba2012"), CBA5)
     for t in ("avr", "pic18"):
         e = im.estimate(t)
