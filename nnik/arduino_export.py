@@ -19,7 +19,8 @@ from nnik import pipeline
 from nnik.domain import domain_um
 from nnik.emit.templating import CODEGEN, RUNTIME, environment
 from nnik.firmware_config import MachineConfig, default_machine
-from nnik.ik_oracle import ik_oracle, ik_sources, load_scenario_of
+from nnik.c_text import c_comment_safe
+from nnik.ik_oracle import ik_oracle, ik_sources, load_scenario_of, picked_implementation
 
 ARDUINO = CODEGEN / "arduino"
 ENGINE_FILES = ("nnik_gcode.h", "nnik_gcode.c")
@@ -56,7 +57,12 @@ def export_arduino(outdir: Path, libdir: Path, machine: MachineConfig | None = N
     vec = golden_vectors(scn)
     out, flags = ik(vec)
     rows = [[int(a), int(b), int(c), int(d), int(f)] for (a, b), (c, d), f in zip(vec.tolist(), out.tolist(), flags.tolist())]
-    hash_ = pipeline.load_metrics(outdir).get("fixed", {}).get("model_hash", "-")
+    pick = picked_implementation(outdir)
+    if pick is not None:
+        what, hash_ = pick.describe(), pick.source_hash()
+    else:
+        what = "MLP " + "-".join(map(str, _shape(outdir)))
+        hash_ = pipeline.load_metrics(outdir).get("fixed", {}).get("model_hash", "-")
     src = libdir / "src"
     src.mkdir(parents=True, exist_ok=True)
     for f in [c_dir / f"{name}.c", c_dir / f"{name}.h", *sorted(RUNTIME.glob("*.h"))]:
@@ -64,8 +70,9 @@ def export_arduino(outdir: Path, libdir: Path, machine: MachineConfig | None = N
     for f in ENGINE_FILES:
         shutil.copy(ARDUINO / "src" / f, src / f)
     libname = f"nnik_{name}"
-    ctx = dict(name=name, scenario=scn.source, libname=libname, version=VERSION, shape="-".join(map(str, _shape(outdir))),
-               description=str(scn.raw.get("description") or name).replace("\n", " "), unit=scn.unit, outputs=scn.outputs, model_hash=hash_,
+    ctx = dict(name=name, scenario=c_comment_safe(scn.source), libname=libname, version=VERSION,
+               shape=c_comment_safe(what).replace('"', "'"),
+               description=c_comment_safe(scn.raw.get("description") or name), unit=scn.unit, outputs=scn.outputs, model_hash=hash_,
                origin=list(machine.origin_um), seg_um=machine.seg_um, tick_hz=machine.tick_hz,
                rapid_um_min=machine.rapid_um_min, feed_um_min=machine.feed_um_min, rows=rows, n=len(rows))
     env = _env()
