@@ -419,7 +419,8 @@ def select(outdir: Path, progress: bool = True, families=None, target: dict | No
         "pick": None if pick is None else {"family": pick.family, "config": pick.config, "describe": pick.impl.describe(),
                                            "model_hash": pick.impl.source_hash(), "file": f"{problem.name}.c"},
     }
-    write_metrics(outdir, {"selection": section})
+    # the families' table also sits at the top level, where issue 8 asked for it
+    write_metrics(outdir, {"selection": section, "implementations": section["implementations"]})
     if pick is None:
         raise NnikError(sel.no_pick_reason(cands, bests, target), problem.scn.source, "[target]")
     return section
