@@ -190,6 +190,18 @@ def cmd_export(args) -> None:
     print_accuracy(pipeline.load_metrics(out))
 
 
+def cmd_select(args) -> None:
+    out = _evaluated_dir(args.model_dir)
+    target = {k: v for k, v in (("chip", args.chip), ("max_error", args.max_error), ("max_cycles", args.max_cycles),
+                                ("max_flash_bytes", args.max_flash_bytes)) if v is not None}
+    if "max_error" in target and not target["max_error"] > 0:
+        raise NnikError(f"--max-error must be > 0, got {target['max_error']}")
+    try:
+        pipeline.select(out, families=args.family or None, target=target)
+    finally:
+        print_selection(pipeline.load_metrics(out))
+
+
 def cmd_verify(args) -> None:
     out = _evaluated_dir(args.model_dir)
     res = pipeline.verify(out, args.target)
@@ -312,6 +324,16 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("model_dir")
     p.add_argument("--arduino", metavar="DIR", help="also write an Arduino/PlatformIO library (self-test, G-code sketch)")
     p.set_defaults(func=cmd_export)
+    p = sub.add_parser("select", help="fit every implementation family, verify each family's best on the chips, "
+                                      "export the cheapest that meets the target as c/NAME.c")
+    p.add_argument("model_dir")
+    p.add_argument("--chip", choices=("avr", "pic18"), help="default: the scenario's [target] chip")
+    p.add_argument("--max-error", type=float, help="default: the scenario's [target] max_error")
+    p.add_argument("--max-cycles", type=float)
+    p.add_argument("--max-flash-bytes", type=int)
+    p.add_argument("--family", action="append", choices=("mlp", "poly", "lut", "hybrid"),
+                   help="only these families (repeatable; default all)")
+    p.set_defaults(func=cmd_select)
     p = sub.add_parser("verify", help="run the generated C and compare it bit for bit with the integer model")
     p.add_argument("model_dir")
     p.add_argument("--target", default="host", choices=("host", "avr", "pic18"))

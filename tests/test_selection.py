@@ -98,3 +98,19 @@ def test_bad_target_table(tmp_path, capsys, table, msg):
     rc = main(["generate", str(p), "-o", str(tmp_path / "out")])
     err = capsys.readouterr().err.strip().splitlines()
     assert rc == 2 and len(err) == 1 and msg in err[0]
+
+
+def test_select_command_rejects_a_bad_max_error(galvo_run, capsys):
+    from nnik.cli import main
+
+    rc = main(["select", str(galvo_run), "--max-error", "0"])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert rc == 2 and len(err) == 1 and "--max-error must be > 0" in err[0]
+
+
+def test_select_command_names_the_best_error_when_nothing_meets(galvo_run, capsys):
+    from nnik.cli import main
+
+    rc = main(["select", str(galvo_run), "--family", "mlp", "--max-error", "1e-9"])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert rc == 2 and len(err) == 1 and "the best reached" in err[0]
