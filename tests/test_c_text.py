@@ -74,3 +74,21 @@ def test_longest_name_builds_on_pic18(tmp_path):
                           workdir=tmp_path / "t" / src.parent.name / src.stem, progress=False)
         assert r["outputs"].shape == (2, 2)
     shutil.rmtree(tmp_path / "t")
+
+
+@pytest.mark.parametrize("kernel", ["fast", "portable"])
+@pytest.mark.parametrize("text", INJECTIONS[:2])
+def test_mlp_c_keeps_an_injected_path_inside_its_comment(tmp_path, galvo_run, kernel, text):
+    """The scenario path goes into the MLP's generated C (both kernels): it must stay a comment."""
+    from nnik.emit.export import render_model_c, write_sources
+
+    require_tool("gcc")
+    model, ds = pipeline.load_pair(galvo_run)
+    im = pipeline.quantize_kernel(model, ds, kernel)
+    files = render_model_c(im, text)
+    write_sources(files, tmp_path)
+    obj = tmp_path / "m.o"
+    subprocess.run(["gcc", "-std=c99", "-Wall", "-Werror", "-c", str(tmp_path / "galvo_cba2012.c"), "-I", str(tmp_path),
+                    "-o", str(obj)], check=True)
+    syms = subprocess.run(["nm", str(obj)], capture_output=True, text=True, check=True).stdout
+    assert "galvo_cba2012_ik" in syms and "injected" not in syms

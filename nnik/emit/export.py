@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from nnik import activations
+from nnik.c_text import c_comment_safe
 from nnik.emit import fastc
 from nnik.emit import kernel as kern
 from nnik.emit.templating import RUNTIME, environment
@@ -38,7 +39,7 @@ def render_model_c(im: IntegerModel, scenario_source: str, kernel: str | None = 
         return fastc.render(im, scenario_source)
     o = im.out
     ctx = dict(
-        name=im.name, NAME=im.name.upper(), scenario=scenario_source, model_hash=im.model_hash(),
+        name=im.name, NAME=im.name.upper(), scenario=c_comment_safe(scenario_source), model_hash=im.model_hash(),
         shape=im.shape, n_in=im.shape[0], n_out=im.shape[-1], unit=im.unit, outputs=im.outputs,
         lo=im.inp.lo.tolist(), hi=im.inp.hi.tolist(), mid=im.inp.mid.tolist(),
         K=im.inp.K.tolist(), M=im.inp.M.tolist(), S=im.inp.S.tolist(),

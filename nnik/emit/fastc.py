@@ -11,6 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from nnik import activations
+from nnik.c_text import c_comment_safe
 from nnik.emit import fastc_avr, fastc_p18
 from nnik.emit import kernel as kern
 from nnik.emit.templating import environment
@@ -289,7 +290,7 @@ def render(im: IntegerModel, scenario_source: str) -> dict[str, str]:
                  else f"tanh variant {im.tanh_variant}" for L in im.hidden]
     o = im.out
     ctx = {
-        "name": im.name, "NAME": im.name.upper(), "scenario": scenario_source, "model_hash": im.model_hash(),
+        "name": im.name, "NAME": im.name.upper(), "scenario": c_comment_safe(scenario_source), "model_hash": im.model_hash(),
         "shape": im.shape, "n_in": im.shape[0], "n_out": im.shape[-1], "unit": im.unit, "outputs": im.outputs,
         "lo": im.inp.lo.tolist(), "hi": im.inp.hi.tolist(), "K": im.inp.K.tolist(), "hidden": im.hidden,
         "residual": o.residual, "g": o.g, "F": o.F, "tanh_desc": tanh_desc, "tables": tables, "tanh_c": tanh_c,
