@@ -46,6 +46,9 @@ class IntRun:
 class Implementation(ABC):
     family: ClassVar[str]
     doc: ClassVar[str] = ""
+    # chips on which the portable C path (-DNNIK_PORTABLE) is verified too, besides the host
+    portable_checked_on: ClassVar[tuple[str, ...]] = TARGETS
+    portable_not_checked_reason: ClassVar[str] = ""
 
     def __init__(self, problem: Problem, config: dict):
         self.problem = problem

@@ -58,6 +58,9 @@ def _in_units(problem: Problem, model):
 class MlpImpl(Implementation):
     family = "mlp"
     doc = "tanh MLP, fixed point, fast hardware-multiply kernel or portable C"
+    portable_checked_on = ("avr",)
+    portable_not_checked_reason = ("SDCC takes minutes to compile the fast kernel's unrolled portable path; the "
+                                   "portable kernel itself is verified on PIC18 by `nnik verify --target pic18`")
 
     def __init__(self, problem: Problem, config: dict, model, im):
         super().__init__(problem, config)
