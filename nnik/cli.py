@@ -82,8 +82,15 @@ def print_selection(m: dict) -> None:
         cyc, fl = r.get("cycles", {}), r.get("flash_bytes", {})
         tg_ = r.get("targets", {})
         checks = [[r.get("host") or {}], *[[tg_.get(k, {}), tg_.get(f"{k}_portable", {})] for k in ("avr", "pic18")]]
-        ok = "/".join("not run" if any("not_run" in c for c in cs) else
-                      ("yes" if all(c.get("bit_exact") for c in cs) else "NO") for cs in checks)
+        def verdict(cs):
+            ran = [c for c in cs if "not_run" not in c]
+            if not ran:
+                return "not run"
+            if not all(c.get("bit_exact") for c in ran):
+                return "NO"
+            return "yes" if len(ran) == len(cs) else "yes (fast)"
+
+        ok = "/".join(verdict(cs) for cs in checks)
         meets = r["pre_max"] <= tg["max_error"]
         t.add_row(r["family"], r["describe"], f"{r['pre_max']:.4f}" + ("" if meets else " (misses)"),
                   *[f"{cyc[k]:.0f}" if cyc.get(k) is not None else "-" for k in ("avr", "pic18")],
@@ -133,13 +140,92 @@ def cmd_run(args) -> None:
         m = pipeline.load_metrics(out)
     print_accuracy(m)
     if not args.no_normalize:
-        console.print("fitting every implementation family, verifying each family's best on host, avr and pic18 ...")
-        try:
-            pipeline.select(out)
-        finally:
-            print_selection(pipeline.load_metrics(out))
+        if getattr(args, "search", None):
+            console.print(f"searching the design space ({args.search} trials), verifying the front on host, avr "
+                          "and pic18 ...")
+            _search_and_print(out, args.search)
+        else:
+            console.print("fitting every implementation family, verifying each family's best on host, avr and pic18 ...")
+            try:
+                pipeline.select(out)
+            finally:
+                print_selection(pipeline.load_metrics(out))
     print_report(out)
     console.print(f"done in {time.perf_counter() - t0:.1f} s; metrics: {out / pipeline.METRICS_FILE}")
+
+
+def print_front(res: dict, unit: str) -> None:
+    t = Table(title=f"study {res['study']} ({res['storage']}): Pareto front"
+                    f"{'' if not res['front'] or res['front'][0]['meets_target'] else ' (no trial meets [target])'}")
+    for col in ("trial", "family", "configuration", f"pre max ({unit})", "est. cycles", "est. flash B"):
+        t.add_column(col, justify="left" if col in ("family", "configuration") else "right")
+    for r in res["front"]:
+        t.add_row(str(r["trial"]), r["family"], r["describe"] or "", f"{r['pre_max']:.4f}", f"{r['cycles']:.0f}",
+                  str(r["flash_bytes"]))
+    console.print(t)
+    trials = res["trials"]
+    console.print("trials: " + ", ".join(f"{v} {k}" for k, v in trials.items() if v))
+
+
+def _search_and_print(out: Path, trials: int, args=None) -> None:
+    from nnik import search
+
+    kw = {} if args is None else {"url": args.storage, "name": args.study, "jobs": args.jobs,
+                                  "families": args.families.split(",") if args.families else None,
+                                  "worker_only": args.worker}
+    try:
+        res = search.search(out, trials, **kw)
+    finally:
+        if not (args is not None and args.worker):
+            print_selection(pipeline.load_metrics(out))
+    s = res["search"]
+    rate = f", {s['trials_per_min']:.1f} trials/min" if s.get("trials_per_min") else ""
+    console.print(f"search: {s['trials_run']} trials run in {s['seconds']:.0f} s{rate} ({s['storage']} storage, study "
+                  f"{s['study']})")
+    if "front" in s:
+        console.print(f"front: {len(s['front'])} points, families {', '.join(s['front_families'])}")
+
+
+def cmd_search(args) -> None:
+    from nnik import search
+
+    src = Path(args.target)
+    if src.is_dir():
+        out = check_model_dir(src, pipeline.C_DIR)
+    else:
+        from nnik.scenario import load_scenario
+
+        scn = load_scenario(src)
+        args.no_normalize = False
+        out = _outdir(args, scn, create=True)
+        if not _trained_for(scn, out):
+            if args.show:
+                raise NnikError("no trained model for this scenario here (run `nnik search` or `nnik run` first)", str(out))
+            console.print(f"[bold]nnik search[/bold] {scn.source} -> {out}/: generating and training first")
+            pipeline.generate(scn, out)
+            _warn_training(pipeline.train(scn, out))
+            pipeline.evaluate(out)
+    if not (out / pipeline.MODEL_FILE).is_file():
+        raise NnikError("no trained model (run `nnik run` first)", str(out))
+    if args.show:
+        res = search.show(out, args.storage, args.study)
+        print_front(res, pipeline.load_pair(out)[0].scenario.unit)
+        return
+    _search_and_print(out, args.trials, args)
+    if not args.worker:
+        print_report(out)
+
+
+def _trained_for(scn, out: Path) -> bool:
+    """OUTDIR holds data.npz and model.pt of this very scenario (a rerun resumes, no retraining)."""
+    if not ((out / pipeline.DATA_FILE).is_file() and (out / pipeline.MODEL_FILE).is_file()
+            and (out / pipeline.METRICS_FILE).is_file()):
+        return False
+    try:
+        model, _ = pipeline.load_pair(out)
+    except NnikError:
+        return False
+    return model.scenario.fingerprint == scn.fingerprint
 
 
 def cmd_generate(args) -> None:
@@ -314,7 +400,8 @@ def build_parser() -> argparse.ArgumentParser:
         p.set_defaults(func=func)
         return p
 
-    scenario_cmd("run", cmd_run, "generate, train, export and evaluate a scenario")
+    p = scenario_cmd("run", cmd_run, "generate, train, export and evaluate a scenario")
+    p.add_argument("--search", type=int, metavar="N", help="pick by an N-trial design-space search, not the ladder")
     scenario_cmd("generate", cmd_generate, "sample the workspace and label it with the exact IK")
     scenario_cmd("train", cmd_train, "train the MLP on OUTDIR/data.npz, write model.pt and model.onnx")
     p = sub.add_parser("evaluate", help="accuracy of a trained model against the truth")
@@ -349,6 +436,17 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("model_dir")
     p.add_argument("-o", "--outdir", help="report directory (default MODEL_DIR/report)")
     p.set_defaults(func=cmd_report)
+    p = sub.add_parser("search", help="multi-objective search over every family's knobs; verify the front, pick")
+    p.add_argument("target", metavar="OUTDIR_OR_SCENARIO", help="a trained output directory or a scenario TOML")
+    p.add_argument("-o", "--outdir", help="output directory for a scenario TOML (default build/<name>/)")
+    p.add_argument("--trials", type=int, default=200, help="finished trials the study should hold (default 200)")
+    p.add_argument("--storage", help="database URL, e.g. postgresql://USER@HOST:PORT/DB (default OUTDIR/search.journal)")
+    p.add_argument("--study", help="study name (default nnik-<scenario>)")
+    p.add_argument("--jobs", type=int, default=1, help="local worker processes (default 1)")
+    p.add_argument("--families", help="comma-separated families to search (default all)")
+    p.add_argument("--worker", action="store_true", help="only run trials (another machine verifies and picks)")
+    p.add_argument("--show", action="store_true", help="print the study's front without running anything")
+    p.set_defaults(func=cmd_search)
     p = sub.add_parser("tanh", help="table of the tanh replacements and their measured errors")
     p.set_defaults(func=cmd_tanh)
     p = sub.add_parser("synth-csv", help="write a calibration CSV measured on a simulated machine")
