@@ -29,7 +29,7 @@ JOBS="${NNIK_BUILD_JOBS:-$(nproc 2>/dev/null || echo 2)}"
 REPO_ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 SFR_SRC="$REPO_ROOT/codegen/harness/pic18/pic18f452_sfr.c"
 
-APT_PKGS=(gcc-avr avr-libc simavr gputils gpsim arduino-core-avr arduino-mk libsimavr-dev)
+APT_PKGS=(gcc-avr avr-libc simavr gputils gpsim arduino-core-avr arduino-mk libsimavr-dev postgresql)
 SDCC_BUILD_DEPS=(bison flex libboost-dev texinfo zlib1g-dev g++ make xz-utils ca-certificates)
 
 T_START=$(date +%s)

@@ -1,0 +1,102 @@
+"""The design space `nnik search` explores: the family and every family's knobs.
+
+Every trial samples every knob of every family (unused ones are ignored), so the search space is
+the same for all trials and NSGA-II's crossover works on the knobs too, not only on the family
+(Optuna samples parameters outside the common space at random). ``config_of`` maps a trial's
+parameters to the family's ``fit(problem, config)`` configuration.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+from nnik.implementations import Problem
+from nnik.implementations.lut import k_for_nodes
+from nnik.implementations.lut_table import fold_plan
+
+MLP_WIDTHS = (3, 4, 5, 6, 8, 10, 12)
+MLP_TANH = ("default", "lerp32", "lerp64", "lerp_mr", "lerp_mr4", "minimax3_x11", "minimax2_x22", "paper_lsq5")
+SPLITS = {"none": False, "x": [True, False], "y": [False, True], "both": True}
+MAX_NODES = 40  # table nodes per axis, as the ladders
+MIN_NODES = 3
+# a trial's MLP trains on a small budget so that it takes seconds (the scenario's own network keeps
+# the budget `nnik run` trained it with)
+FAST_TRAINING = {"adam_steps": 400, "lbfgs_rounds": 40, "restarts": 1, "patience": 15, "max_seconds": 20.0}
+
+
+def fast_problem(problem: Problem) -> Problem:
+    """The problem, changed in place to a small MLP training budget (its check set and its cache,
+    with the scenario's trained model, kept)."""
+    scn = problem.scn
+    problem.scn = dataclasses.replace(scn, training={**scn.training, **FAST_TRAINING})
+    return problem
+
+
+def k_range(span: int) -> tuple[int, int]:
+    """Cell exponents from MAX_NODES nodes (smallest k) to MIN_NODES nodes (largest k) on `span`."""
+    k_hi = k_for_nodes(span, MIN_NODES)
+    k_lo = k_hi
+    while k_lo > 0 and (span >> (k_lo - 1)) + 2 <= MAX_NODES:
+        k_lo -= 1
+    return k_lo, k_hi
+
+
+def spans(problem: Problem) -> dict[str, list[int]]:
+    """Stored span per axis in input units: LUT (after its symmetry folds) and hybrid."""
+    fold, _ = fold_plan(problem, True)
+    lut = [int(problem.hi[a]) if fold[a] else int(problem.hi[a] - problem.lo[a]) for a in range(2)]
+    return {"lut": lut, "hybrid": [int(problem.hi[a] - problem.lo[a]) for a in range(2)]}
+
+
+def suggest(trial, problem: Problem, families: list[str]) -> tuple[str, dict]:
+    """Sample the family and every knob; return (family, config)."""
+    fam = trial.suggest_categorical("family", list(families))
+    p = {}
+    p["mlp_depth"] = trial.suggest_int("mlp_depth", 1, 2)
+    p["mlp_w1"] = trial.suggest_categorical("mlp_w1", MLP_WIDTHS)
+    p["mlp_w2"] = trial.suggest_categorical("mlp_w2", MLP_WIDTHS)
+    p["mlp_mode"] = trial.suggest_categorical("mlp_mode", ["full", "residual"])
+    p["mlp_tanh"] = trial.suggest_categorical("mlp_tanh", MLP_TANH)
+    p["mlp_weight_bits"] = trial.suggest_categorical("mlp_weight_bits", [8, 16])
+    p["poly_degree"] = trial.suggest_int("poly_degree", 1, 7)
+    p["poly_coef_bits"] = trial.suggest_categorical("poly_coef_bits", [16, 32])
+    p["poly_split"] = trial.suggest_categorical("poly_split", list(SPLITS))
+    p["poly_lsb"] = trial.suggest_categorical("poly_lsb", [False, True])
+    p["poly_rounding"] = trial.suggest_categorical("poly_rounding", [True, False])
+    sp = spans(problem)
+    for fam_ in ("lut", "hybrid"):
+        for a, ax in enumerate("xy"):
+            lo, hi = k_range(sp[fam_][a])
+            p[f"{fam_}_k{ax}"] = trial.suggest_int(f"{fam_}_k{ax}", lo, hi)
+        p[f"{fam_}_W"] = trial.suggest_categorical(f"{fam_}_W", [8, 16])
+        p[f"{fam_}_fit"] = trial.suggest_categorical(f"{fam_}_fit", ["lsq", "minimax"])
+    p["lut_bits"] = trial.suggest_categorical("lut_bits", [16, 32])
+    p["hybrid_coef_bits"] = trial.suggest_categorical("hybrid_coef_bits", [8, 16])
+    return fam, config_of(fam, p, problem)
+
+
+def config_of(fam: str, p: dict, problem: Problem) -> dict:
+    """A family's configuration from the sampled knobs (the others are ignored)."""
+    if fam == "mlp":
+        hidden = [p["mlp_w1"]] + ([p["mlp_w2"]] if p["mlp_depth"] == 2 else [])
+        return {"hidden": hidden, "mode": p["mlp_mode"], "kernel": "fast", "tanh": p["mlp_tanh"],
+                "weight_bits": p["mlp_weight_bits"]}
+    if fam == "poly":
+        return {"degree": p["poly_degree"], "fit": "best", "coef_bits": p["poly_coef_bits"],
+                "split": SPLITS[p["poly_split"]], "trim": 4, "rounding": p["poly_rounding"], "lsb": p["poly_lsb"]}
+    if fam == "lut":
+        return {"k": [p["lut_kx"], p["lut_ky"]], "bits": p["lut_bits"], "W": p["lut_W"], "fit": p["lut_fit"],
+                "symmetry": True}
+    return {"k": [p["hybrid_kx"], p["hybrid_ky"]], "bits": 16, "W": p["hybrid_W"], "fit": p["hybrid_fit"],
+            "base": "affine", "coef_bits": p["hybrid_coef_bits"]}
+
+
+def minimax_too_big(fam: str, config: dict, problem: Problem) -> str | None:
+    """Minimax nodes only on exact samples of small tables, as the ladders (else it is slow and,
+    on measured rows, fits the noise)."""
+    if fam not in ("lut", "hybrid") or config.get("fit") != "minimax":
+        return None
+    sp = spans(problem)[fam]
+    if not problem.analytic or max((sp[a] >> config["k"][a]) + 2 for a in range(2)) > 14:
+        return "minimax fit only for exact tables of at most 14 nodes per axis"
+    return None

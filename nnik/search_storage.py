@@ -1,0 +1,90 @@
+"""Where `nnik search` keeps its study: an Optuna journal file in OUTDIR by default (no server,
+safe with several local processes), or a database URL (``postgresql://...``) that workers on
+several machines share. A study records the scenario's fingerprint; one made for another
+scenario is refused."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from nnik.errors import NnikError
+
+JOURNAL_FILE = "search.journal"
+FINGERPRINT_ATTR = "scenario_fingerprint"
+RDB_SCHEMES = ("postgresql", "postgresql+psycopg2", "postgresql+psycopg", "sqlite")
+
+
+def storage_kind(url: str | None) -> str:
+    if url is None:
+        return "journal"
+    return url.split("://", 1)[0].split("+", 1)[0]
+
+
+def open_storage(url: str | None, outdir: Path):
+    """The Optuna storage for ``url`` (None: OUTDIR/search.journal)."""
+    import optuna
+
+    if url is None:
+        from optuna.storages.journal import JournalFileBackend, JournalFileOpenLock, JournalStorage
+
+        path = str(outdir / JOURNAL_FILE)
+        return JournalStorage(JournalFileBackend(path, lock_obj=JournalFileOpenLock(path)))
+    scheme = url.split("://", 1)[0] if "://" in url else None
+    if scheme not in RDB_SCHEMES:
+        raise NnikError(f"storage URL {url!r}: expected postgresql://USER@HOST:PORT/DB (or sqlite:///FILE)", "--storage")
+    if scheme == "postgresql":  # the driver nnik depends on (SQLAlchemy 2.1 would look for psycopg 3)
+        url = "postgresql+psycopg2://" + url.split("://", 1)[1]
+    try:
+        return optuna.storages.RDBStorage(url, engine_kwargs=_engine_kwargs(scheme), heartbeat_interval=60,
+                                          grace_period=180)
+    except Exception as exc:  # sqlalchemy's errors: bad URL, unreachable server, bad credentials
+        raise NnikError(f"storage {_redact(url)}: {_first_line(exc)}", "--storage") from None
+
+
+def _engine_kwargs(scheme: str) -> dict:
+    if scheme.startswith("postgresql"):
+        return {"connect_args": {"connect_timeout": 5}, "pool_pre_ping": True}
+    return {}
+
+
+def _redact(url: str) -> str:
+    """The URL without its password."""
+    head, sep, tail = url.partition("://")
+    if "@" in tail:
+        cred, at, rest = tail.rpartition("@")
+        tail = cred.split(":", 1)[0] + ":***" * (":" in cred) + at + rest
+    return head + sep + tail
+
+
+def _first_line(exc: BaseException) -> str:
+    text = str(getattr(exc, "orig", None) or exc).strip().splitlines()
+    return (text[0] if text else type(exc).__name__)[:200]
+
+
+def open_study(storage, name: str, fingerprint: str, scenario: str, directions, sampler=None, create: bool = True):
+    """Create or load the study ``name``; refuse one made for another scenario (NnikError)."""
+    import optuna
+
+    try:
+        if create:
+            study = optuna.create_study(study_name=name, storage=storage, directions=directions, sampler=sampler,
+                                        load_if_exists=True)
+        else:
+            study = optuna.load_study(study_name=name, storage=storage, sampler=sampler)
+        attrs = study.user_attrs
+    except KeyError:
+        raise NnikError(f"no study {name!r} in this storage (run `nnik search` first)", "--study") from None
+    except ValueError as exc:
+        raise NnikError(f"study {name!r}: {_first_line(exc)}", "--study") from None
+    except Exception as exc:
+        if type(exc).__module__.startswith("sqlalchemy"):
+            raise NnikError(f"storage: {_first_line(exc)}", "--storage") from None
+        raise
+    got = attrs.get(FINGERPRINT_ATTR)
+    if got is None and create:
+        study.set_user_attr(FINGERPRINT_ATTR, fingerprint)
+        study.set_user_attr("scenario", scenario)
+    elif got is not None and got != fingerprint:
+        raise NnikError(f"study {name!r} was made for scenario {attrs.get('scenario', '?')!r} ({got}), not for "
+                        f"{scenario!r} ({fingerprint}); use another --study or storage", "--study")
+    return study
