@@ -88,7 +88,7 @@ def fit_ladder(problem: Problem, families=None, progress=None, max_error: float 
         out.append(c)
         if bar:
             bar.update(1)
-            bar.set_postfix_str(f"{fam}: {c.acc.get('pre_max', float('nan')):.3g}" if c.impl else f"{fam}: -")
+            bar.set_postfix_str(f"{fam}: {c.acc.get('pre_max', float('nan')):.3g}" if c.impl else f"{fam}: -", refresh=False)
     if bar:
         bar.close()
     for fam in fams:  # the most accurate of a family that never met the target gets the full check

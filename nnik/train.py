@@ -232,7 +232,7 @@ def _fit_one(net, xt, yt, xv, yv, cfg, deadline, restart, history, t_start, bar)
         stale = 0 if v < best_val * (1 - 1e-3) else stale + 1
         if v < best_val:
             best_val, best_state = v, copy.deepcopy(net.state_dict())
-        bar.set_postfix(restart=restart, val=f"{best_val:.3e}")
+        bar.set_postfix(restart=restart, val=f"{best_val:.3e}", refresh=False)  # drawn at mininterval
         if stale >= cfg["patience"]:
             break
         if time.perf_counter() > deadline:
