@@ -30,6 +30,7 @@ test: setup toolchains
 bench: setup toolchains
 	$(PYTHON) -m nnik.bench $(SCENARIO)
 	$(PYTHON) -m nnik.bench_families
+	$(PYTHON) -m nnik.search_bench
 	$(PYTHON) -m nnik.estimate sweep
 	$(PYTHON) -m nnik.estimate sweep --kernel fast --tanh '' --arch 4 --arch 6 --arch 8 --arch 10 --arch 12 --arch 16
 

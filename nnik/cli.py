@@ -155,13 +155,13 @@ def cmd_run(args) -> None:
 
 
 def print_front(res: dict, unit: str) -> None:
-    t = Table(title=f"study {res['study']} ({res['storage']}): Pareto front"
-                    f"{'' if not res['front'] or res['front'][0]['meets_target'] else ' (no trial meets [target])'}")
-    for col in ("trial", "family", "configuration", f"pre max ({unit})", "est. cycles", "est. flash B"):
+    t = Table(title=f"study {res['study']} ({res['storage']}): Pareto front of error, estimated cycles and flash "
+                    f"({sum(r['meets_target'] for r in res['front'])} of {len(res['front'])} points meet [target])")
+    for col in ("trial", "family", "configuration", f"pre max ({unit})", "est. cycles", "est. flash B", "meets"):
         t.add_column(col, justify="left" if col in ("family", "configuration") else "right")
     for r in res["front"]:
         t.add_row(str(r["trial"]), r["family"], r["describe"] or "", f"{r['pre_max']:.4f}", f"{r['cycles']:.0f}",
-                  str(r["flash_bytes"]))
+                  str(r["flash_bytes"]), "yes" if r["meets_target"] else "")
     console.print(t)
     trials = res["trials"]
     console.print("trials: " + ", ".join(f"{v} {k}" for k, v in trials.items() if v))
@@ -183,7 +183,8 @@ def _search_and_print(out: Path, trials: int, args=None) -> None:
     console.print(f"search: {s['trials_run']} trials run in {s['seconds']:.0f} s{rate} ({s['storage']} storage, study "
                   f"{s['study']})")
     if "front" in s:
-        console.print(f"front: {len(s['front'])} points, families {', '.join(s['front_families'])}")
+        console.print(f"front: {len(s['front'])} points ({s['feasible_front']} on the front of those that meet "
+                      f"[target]), families {', '.join(s['front_families'])}")
 
 
 def cmd_search(args) -> None:

@@ -231,19 +231,20 @@ def search(outdir: Path, trials: int, url: str | None = None, name: str | None =
 
 
 # ---- the front, verified ----------------------------------------------------------------------------
-def front_trials(study, target: dict) -> tuple[list, bool]:
-    """(the Pareto-optimal completed trials among those meeting [target] (or among all when none
-    does), whether they meet it), cheapest on the chip first."""
+def front_trials(study, target: dict, feasible_only: bool = False) -> list:
+    """The Pareto-optimal completed trials (error, cycles, flash), one per configuration, cheapest on
+    the chip first: over every trial (the picture of the trade-off), or over those that meet
+    [target] (where the pick comes from)."""
     from optuna.trial import TrialState
 
-    comp = [t for t in study.get_trials(deepcopy=False, states=(TrialState.COMPLETE,)) if t.values]
-    ok = [t for t in comp if feasible(t.user_attrs, target)]
-    pool = ok or comp
+    pool = [t for t in study.get_trials(deepcopy=False, states=(TrialState.COMPLETE,)) if t.values]
+    if feasible_only:
+        pool = [t for t in pool if feasible(t.user_attrs, target)]
     front = [t for t in pool if not any(_dominates(o.values, t.values) for o in pool)]
     uniq = {}
     for t in sorted(front, key=lambda t: (t.values[1], t.values[2], t.values[0], t.number)):
         uniq.setdefault(json.dumps([t.user_attrs["family"], t.user_attrs["config"]], sort_keys=True), t)
-    return list(uniq.values()), bool(ok)
+    return list(uniq.values())
 
 
 def _dominates(a, b) -> bool:
@@ -251,10 +252,10 @@ def _dominates(a, b) -> bool:
 
 
 def front_rows(study, target: dict) -> list[dict]:
-    front, ok = front_trials(study, target)
     return [{"trial": t.number, "family": t.user_attrs["family"], "config": t.user_attrs["config"],
              "describe": t.user_attrs.get("describe"), "pre_max": t.values[0], "cycles": t.values[1],
-             "flash_bytes": int(t.values[2]), "meets_target": ok} for t in front]
+             "flash_bytes": int(t.values[2]), "meets_target": feasible(t.user_attrs, target)}
+            for t in front_trials(study, target)]
 
 
 def show(outdir: Path, url: str | None = None, name: str | None = None) -> dict:
@@ -290,10 +291,12 @@ def finish(outdir: Path, study, url: str | None, info: dict, progress: bool = Tr
 
     problem = fast_problem(pipeline.problem_for(outdir))
     target = problem.scn.target
-    front, ok = front_trials(study, target)
+    # the pick comes from the front of the trials that meet [target]; the picture shows the whole front
+    ok_front = front_trials(study, target, feasible_only=True)
+    front = front_trials(study, target)
     comp = [t for t in study.get_trials(deepcopy=False, states=(TrialState.COMPLETE,)) if t.values]
-    chosen = front[:MAX_REFIT]
-    # a family absent from the front is still shown: its most accurate trial
+    chosen = list({t.number: t for t in ok_front[:MAX_REFIT] + front[:MAX_REFIT]}.values())
+    # a family absent from both is still shown: its most accurate trial
     fams = {t.user_attrs["family"] for t in chosen}
     for fam in dict.fromkeys(t.user_attrs["family"] for t in comp):
         if fam not in fams:
@@ -307,6 +310,10 @@ def finish(outdir: Path, study, url: str | None, info: dict, progress: bool = Tr
         for c in tqdm([c for c in bests.values() if c.meets(target["max_error"])], desc="verify family bests",
                       unit="family", disable=not progress, leave=False):
             sel.verify_candidate(c, c_dir / sel.ALT_DIR / c.family, (outdir / "targets" / "families").resolve())
+    for c in bests.values():
+        if not c.checks:  # shown with its estimate only
+            why = {"not_run": f"misses max_error {target['max_error']:g}: not verified"}
+            c.checks = {k: dict(why) for k in ("host", *TARGETS, *(f"{t}_portable" for t in TARGETS))}
     pick = sel.choose(bests, target) if reachable else None
     if reachable:
         sel.write_choice(c_dir, bests, pick)
@@ -320,7 +327,7 @@ def finish(outdir: Path, study, url: str | None, info: dict, progress: bool = Tr
                                            "model_hash": pick.impl.source_hash(), "file": f"{problem.name}.c"},
     }
     search_section = {"study": study.study_name, "storage": storage_kind(url), "trials": states, **info,
-                      "front_meets_target": ok, "front": front_rows(study, target),
+                      "feasible_front": len(ok_front), "front": front_rows(study, target),
                       "front_families": sorted({t.user_attrs["family"] for t in front})}
     pipeline.write_metrics(outdir, {"selection": section, "search": search_section})
     if pick is None:

@@ -97,9 +97,10 @@ def test_constraints_follow_target(lut_study):
     assert not search.feasible(t.user_attrs, tight)
     assert search.feasible(t.user_attrs, {**tight, "max_cycles": t.values[1]})
     assert not search.feasible({}, {**tight, "max_cycles": None})  # a config that could not be built
-    front, ok = search.front_trials(study, {**target, "max_error": 1e9})
-    assert ok and front
-    assert all(not search._dominates(o.values, f.values) for f in front for o in done)
+    front = search.front_trials(study, target)
+    assert front and all(not search._dominates(o.values, f.values) for f in front for o in done)
+    ok = search.front_trials(study, {**target, "max_error": t.values[0]}, feasible_only=True)
+    assert ok and all(f.values[0] <= t.values[0] for f in ok)
 
 
 def test_show_prints_front_without_running(lut_study, capsys):
@@ -215,3 +216,25 @@ def test_two_workers_share_a_postgres_study(galvo_run, tmp_path, postgres):
     workers = {t.user_attrs["worker"] for t in trials}
     assert len(workers) == 2, workers  # both workers' trials are in the study
     assert not (a / JOURNAL_FILE).exists() and not (b / JOURNAL_FILE).exists()
+
+
+def test_search_verifies_the_front_and_picks(galvo_run, tmp_path, capsys):
+    out = _copy_run(galvo_run, tmp_path / "p")
+    assert main(["search", str(out), "--trials", "6", "--families", "poly"]) == 0, capsys.readouterr().err
+    m = search.pipeline.load_metrics(out)
+    s, sel = m["search"], m["selection"]
+    tg = sel["target"]
+    assert sel["source"] == "search" and s["storage"] == "journal" and s["study"] == "nnik-galvo_cba2012"
+    assert s["trials"]["complete"] + s["trials"]["pruned"] == 6
+    front = s["front"]
+    assert front and s["feasible_front"] >= 1
+    assert all(r["meets_target"] == (r["pre_max"] <= tg["max_error"]) for r in front)
+    pts = [(r["pre_max"], r["cycles"], r["flash_bytes"]) for r in front]
+    assert not any(search._dominates(a, b) for a in pts for b in pts)
+    (row,) = [r for r in sel["implementations"] if r["picked"]]
+    # the rule of selection.choose: the cheapest on the chip, verified bit-exact on host and both chips
+    assert row["estimate"][tg["chip"]]["cycles"] == pytest.approx(min(r["cycles"] for r in front if r["meets_target"]))
+    assert row["host"]["bit_exact"] and all(row["targets"][t]["bit_exact"] for t in ("avr", "pic18"))
+    assert row["pre_max"] <= tg["max_error"]
+    assert (out / "c" / "galvo_cba2012.c").is_file() and sel["pick"]["model_hash"] == row["model_hash"]
+    assert len(sel["ladder"]) >= len(front)  # the report's picture shows the front

@@ -92,6 +92,15 @@ def build(ctx) -> Section:
         f"Target: max_error {tg['max_error']:g} {unit} before rounding on {sel['check_points']} {sel['check_set']} "
         f"points; the cheapest by measured cycles on {tg['chip']} wins, flash breaks ties. Inputs in units of "
         f"{sel['input_unit_um']:g} µm. Each family's best is in c/alt/<family>/, the pick in c/.")
+    srch = ctx.m.get("search")
+    if sel.get("source") == "search" and isinstance(srch, dict):
+        done = sum((srch.get("trials") or {}).get(k, 0) for k in ("complete", "pruned", "fail"))
+        sec.paragraphs.append(
+            f"Found by `nnik search`: {done} trials of study {srch.get('study')} ({srch.get('storage')} storage); its "
+            f"Pareto front of error, estimated cycles and flash has {len(srch.get('front') or [])} points over "
+            f"{', '.join(srch.get('front_families') or []) or 'no family'}; the pick comes from the front of the "
+            f"{srch.get('feasible_front', 0)} points that meet the target, each family's cheapest verified on the "
+            "simulators.")
     t = Table("implementations-table", "Each family's best point (pre-rounding error; cycles: mean per call on the "
               "simulator; flash: the model's own bytes)",
               ["family", "configuration", f"pre max ({unit})", f"RMS ({unit})", "avr cycles", "pic18 cycles",
@@ -117,6 +126,11 @@ def build(ctx) -> Section:
     return sec
 
 
+def _hollow(sel: dict) -> str:
+    """What the hollow points are: the ladder's configurations, or `nnik search`'s Pareto front."""
+    return "search's Pareto front" if sel.get("source") == "search" else "ladder"
+
+
 def plot_front(ctx, sel: dict) -> Fig:
     from nnik.report.implementations_plot import families_front
 
@@ -135,7 +149,7 @@ def plot_front(ctx, sel: dict) -> Fig:
     float_ik = {c: lookup(ctx.m, "targets", c, "baselines", "float", "cycles") for c in CHIPS}
     families_front(ctx.out / PNG_FRONT, points=pts, chips=CHIPS, max_error=sel["target"]["max_error"], unit=ctx.unit,
                    float_ik={k: v for k, v in float_ik.items() if v}, title=f"{ctx.m.get('name')}: error against cost, "
-                   "every family (filled: measured best; hollow: ladder, estimated)")
+                   f"every family (filled: measured best; hollow: {_hollow(sel)}, estimated)")
     return Fig(PNG_FRONT, "error against cycles and flash per family",
                "Pre-rounding max error (log) against cycles (top) and flash (bottom) on each chip. The pick is "
                "circled; the MLP's best is labelled; the dotted line is max_error.")
