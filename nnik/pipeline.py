@@ -413,7 +413,7 @@ def select(outdir: Path, progress: bool = True, families=None, target: dict | No
         sel.write_choice(outdir / C_DIR, bests, pick)
     section = {
         "target": target, "input_unit_um": problem.unit_um, "check_points": int(len(problem.check[0])),
-        "check_set": "dense grid" if problem.analytic else "held-out rows",
+        "check_set": "grid + edge + random check" if problem.analytic else "held-out rows",
         "implementations": [c.row(picked=c is pick) for c in bests.values()],
         "ladder": [c.row() for c in cands],
         "pick": None if pick is None else {"family": pick.family, "config": pick.config, "describe": pick.impl.describe(),

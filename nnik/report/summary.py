@@ -26,6 +26,17 @@ def summary_rows(metrics: dict) -> list[tuple[str, ...]]:
     rows.append(("scenario", str(metrics.get("name", "?")),
                  f"{metrics.get('mechanism', '?')}; {shape} {net.get('mode', '')} MLP, "
                  f"{net.get('parameters', '?')} parameters"))
+    sel = metrics.get("selection")
+    if isinstance(sel, dict):
+        pick = next((r for r in sel.get("implementations", []) if r.get("picked")), None)
+        tg = sel.get("target", {})
+        chip = tg.get("chip", "avr")
+        if pick:
+            rows.append(("pick (c/NAME.c)", f"{pick['family']}: max {fmt(pick.get('pre_max'), D_UNIT)} {unit} pre-rounding",
+                         f"{pick.get('describe')}; {fmt(lookup(pick, 'cycles', chip), D_CYC)} cycles, "
+                         f"{lookup(pick, 'flash_bytes', chip)} B on {chip} (target {tg.get('max_error')} {unit})"))
+        else:
+            rows.append(("pick (c/NAME.c)", "none", f"no family met max_error {tg.get('max_error')} {unit}"))
     n_test = lookup(metrics, "dataset", "n_test")
     truth = lookup(metrics, "dataset", "truth", default="truth")
     aff = metrics.get("affine_only")
