@@ -156,7 +156,7 @@ def cmd_run(args) -> None:
 
 def print_front(res: dict, unit: str) -> None:
     t = Table(title=f"study {res['study']} ({res['storage']}): Pareto front of error, estimated cycles and flash "
-                    f"({sum(r['meets_target'] for r in res['front'])} of {len(res['front'])} points meet [target])")
+                    f"({sum(r['meets_target'] for r in res['front'])} of {len(res['front'])} points meet \\[target])")
     for col in ("trial", "family", "configuration", f"pre max ({unit})", "est. cycles", "est. flash B", "meets"):
         t.add_column(col, justify="left" if col in ("family", "configuration") else "right")
     for r in res["front"]:
@@ -172,7 +172,7 @@ def _search_and_print(out: Path, trials: int, args=None) -> None:
 
     kw = {} if args is None else {"url": args.storage, "name": args.study, "jobs": args.jobs,
                                   "families": args.families.split(",") if args.families else None,
-                                  "worker_only": args.worker}
+                                  "worker_only": args.worker, "warm_start": not args.no_warm_start}
     try:
         res = search.search(out, trials, **kw)
     finally:
@@ -184,7 +184,7 @@ def _search_and_print(out: Path, trials: int, args=None) -> None:
                   f"{s['study']})")
     if "front" in s:
         console.print(f"front: {len(s['front'])} points ({s['feasible_front']} on the front of those that meet "
-                      f"[target]), families {', '.join(s['front_families'])}")
+                      f"\\[target]), families {', '.join(s['front_families'])}")
 
 
 def cmd_search(args) -> None:
@@ -446,6 +446,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--jobs", type=int, default=1, help="local worker processes (default 1)")
     p.add_argument("--families", help="comma-separated families to search (default all)")
     p.add_argument("--worker", action="store_true", help="only run trials (another machine verifies and picks)")
+    p.add_argument("--no-warm-start", action="store_true", help="do not queue the families' ladders as a new study's first trials")
     p.add_argument("--show", action="store_true", help="print the study's front without running anything")
     p.set_defaults(func=cmd_search)
     p = sub.add_parser("tanh", help="table of the tanh replacements and their measured errors")

@@ -28,11 +28,12 @@ from nnik.errors import NnikError
 from nnik.implementations import FAMILIES
 from nnik.implementations.accuracy import accuracy
 from nnik.implementations.base import TARGETS
-from nnik.search_space import fast_problem, minimax_too_big, suggest
+from nnik.search_space import fast_problem, params_of, suggest
 from nnik.search_storage import open_storage, open_study, storage_kind
 
 SEED = 20261123
 POPULATION = 20
+MUTATION = 0.25  # per parameter (Optuna's default is 1 / number of parameters, about 0.05 here)
 DIRECTIONS = ("minimize", "minimize", "minimize")
 WORKER = f"{socket.gethostname()}:{os.getpid()}"  # which process ran a trial (recorded with it)
 MAX_REFIT = 40  # front points refitted for the report's picture (cheapest on the chip first)
@@ -66,9 +67,6 @@ class Objective:
         self.quick = sel._quick_points(problem)
 
     def measure(self, fam: str, cfg: dict) -> dict:
-        why = minimax_too_big(fam, cfg, self.problem)
-        if why:
-            return {"error": why}
         try:
             impl = FAMILIES[fam].fit(self.problem, cfg)
             acc = accuracy(impl, self.quick)
@@ -153,7 +151,10 @@ def run_worker(outdir: str, url: str | None, name: str, n_total: int, families: 
     if done >= n_total:
         return
     # the seed moves on with the study, so a resumed search does not repeat its first proposals
-    sampler = optuna.samplers.NSGAIISampler(population_size=POPULATION, seed=SEED + 7919 * worker + done)
+    # constrained domination puts every feasible point before any infeasible one, so a family whose
+    # first points miss the target would die out: a high mutation rate keeps proposing it
+    sampler = optuna.samplers.NSGAIISampler(population_size=POPULATION, mutation_prob=MUTATION,
+                                            seed=SEED + 7919 * worker + done)
     study = open_study(storage, name, scn.fingerprint, scn.name, list(DIRECTIONS), sampler=sampler)
     objective = Objective(problem, target, families, _seen(study))
     callbacks = [MaxTrialsCallback(n_total, states=(TrialState.COMPLETE, TrialState.PRUNED, TrialState.FAIL))]
@@ -189,7 +190,8 @@ def _spawned(outdir, url, name, n_total, families, worker):
 
 
 def search(outdir: Path, trials: int, url: str | None = None, name: str | None = None, jobs: int = 1,
-           families: list[str] | None = None, progress: bool = True, worker_only: bool = False) -> dict:
+           families: list[str] | None = None, progress: bool = True, worker_only: bool = False,
+           warm_start: bool = True) -> dict:
     """Run (or continue) the search to ``trials`` finished trials, then verify and pick (not with
     ``worker_only``: a worker on one of several machines only runs trials)."""
     import multiprocessing as mp
@@ -208,6 +210,8 @@ def search(outdir: Path, trials: int, url: str | None = None, name: str | None =
     storage = open_storage(url, outdir)  # bad URL, unreachable server, other scenario: fail before any work
     study = open_study(storage, name, scn.fingerprint, scn.name, list(DIRECTIONS))
     before = len(_finished(study))
+    if warm_start and not study.get_trials(deepcopy=False):
+        warm(study, outdir, fams)
     t0 = time.perf_counter()
     procs = []
     if jobs > 1:
@@ -228,6 +232,20 @@ def search(outdir: Path, trials: int, url: str | None = None, name: str | None =
     if worker_only:
         return {"search": {"study": name, "storage": storage_kind(url), **info}}
     return finish(outdir, study, url, info, progress)
+
+
+def warm(study, outdir: Path, families: list[str]) -> int:
+    """Queue every family's ladder (what `nnik run` tries) as the new study's first trials, so the
+    search starts from the ladder's points and can only improve on them; returns how many."""
+    problem = pipeline.problem_for(outdir)
+    n = 0
+    for fam in families:
+        for cfg in FAMILIES[fam].ladder(problem):
+            p = params_of(fam, cfg)
+            if p is not None:
+                study.enqueue_trial(p, skip_if_exists=True)
+                n += 1
+    return n
 
 
 # ---- the front, verified ----------------------------------------------------------------------------

@@ -85,18 +85,38 @@ def config_of(fam: str, p: dict, problem: Problem) -> dict:
         return {"degree": p["poly_degree"], "fit": "best", "coef_bits": p["poly_coef_bits"],
                 "split": SPLITS[p["poly_split"]], "trim": 4, "rounding": p["poly_rounding"], "lsb": p["poly_lsb"]}
     if fam == "lut":
-        return {"k": [p["lut_kx"], p["lut_ky"]], "bits": p["lut_bits"], "W": p["lut_W"], "fit": p["lut_fit"],
+        k = [p["lut_kx"], p["lut_ky"]]
+        return {"k": k, "bits": p["lut_bits"], "W": p["lut_W"], "fit": _fit(p["lut_fit"], "lut", k, problem),
                 "symmetry": True}
-    return {"k": [p["hybrid_kx"], p["hybrid_ky"]], "bits": 16, "W": p["hybrid_W"], "fit": p["hybrid_fit"],
+    k = [p["hybrid_kx"], p["hybrid_ky"]]
+    return {"k": k, "bits": 16, "W": p["hybrid_W"], "fit": _fit(p["hybrid_fit"], "hybrid", k, problem),
             "base": "affine", "coef_bits": p["hybrid_coef_bits"]}
 
 
-def minimax_too_big(fam: str, config: dict, problem: Problem) -> str | None:
+def _fit(fit: str, fam: str, k: list[int], problem: Problem) -> str:
     """Minimax nodes only on exact samples of small tables, as the ladders (else it is slow and,
-    on measured rows, fits the noise)."""
-    if fam not in ("lut", "hybrid") or config.get("fit") != "minimax":
-        return None
+    on measured rows, fits the noise): a larger table falls back to least squares."""
     sp = spans(problem)[fam]
-    if not problem.analytic or max((sp[a] >> config["k"][a]) + 2 for a in range(2)) > 14:
-        return "minimax fit only for exact tables of at most 14 nodes per axis"
-    return None
+    small = problem.analytic and max((sp[a] >> k[a]) + 2 for a in range(2)) <= 14
+    return fit if small else "lsq"
+
+
+def params_of(fam: str, config: dict) -> dict | None:
+    """The search parameters of a family's configuration (e.g. a ladder's), or None when the
+    space cannot express it; the other families' knobs are left to the sampler."""
+    if fam == "mlp":
+        h = list(config["hidden"])
+        if not 1 <= len(h) <= 2 or any(w not in MLP_WIDTHS for w in h) or config.get("tanh") not in MLP_TANH:
+            return None
+        return {"family": fam, "mlp_depth": len(h), "mlp_w1": h[0], **({"mlp_w2": h[1]} if len(h) == 2 else {}),
+                "mlp_mode": config["mode"], "mlp_tanh": config["tanh"], "mlp_weight_bits": config["weight_bits"]}
+    if fam == "poly":
+        split = next((k for k, v in SPLITS.items() if v == config["split"]), None)
+        if split is None or config.get("fit", "best") != "best" or config["coef_bits"] not in (16, 32):
+            return None
+        return {"family": fam, "poly_degree": config["degree"], "poly_coef_bits": config["coef_bits"],
+                "poly_split": split, "poly_lsb": config["lsb"], "poly_rounding": config["rounding"]}
+    k = [int(v) for v in config["k"]]
+    out = {"family": fam, f"{fam}_kx": k[0], f"{fam}_ky": k[1], f"{fam}_W": config["W"], f"{fam}_fit": config["fit"]}
+    out.update({"lut_bits": config["bits"]} if fam == "lut" else {"hybrid_coef_bits": config["coef_bits"]})
+    return out

@@ -113,11 +113,11 @@ def test_show_prints_front_without_running(lut_study, capsys):
 
 def test_journal_resumes_after_sigkill(galvo_run, tmp_path):
     out = _copy_run(galvo_run, tmp_path / "k")
-    proc = _cli(out, "--trials", 4, "--worker", "--families", "lut")
+    proc = _cli(out, "--trials", 20, "--worker", "--families", "lut")
     done_before: dict[int, tuple] = {}
     deadline = time.monotonic() + 300
     while time.monotonic() < deadline and proc.poll() is None:
-        time.sleep(0.5)
+        time.sleep(0.2)
         if (out / JOURNAL_FILE).is_file():
             try:
                 trials = _study(out).get_trials(states=(TrialState.COMPLETE, TrialState.PRUNED))
@@ -129,17 +129,22 @@ def test_journal_resumes_after_sigkill(galvo_run, tmp_path):
     assert proc.poll() is None, proc.communicate()
     proc.send_signal(signal.SIGKILL)
     proc.wait()
-    assert len(done_before) < 4
-    res = _cli(out, "--trials", 4, "--worker", "--families", "lut")
+    assert 2 <= len(done_before) < 20
+    res = _cli(out, "--trials", 20, "--worker", "--families", "lut")
     _, err = res.communicate(timeout=300)
     assert res.returncode == 0, err
     trials = _study(out).get_trials()
     finished = [t for t in trials if t.state in (TrialState.COMPLETE, TrialState.PRUNED)]
-    assert len(finished) == 4
+    assert len(finished) == 20
     assert len({t.number for t in trials}) == len(trials)
     for n, (params, values) in done_before.items():  # nothing completed before the kill was lost
         t = next(t for t in trials if t.number == n)
         assert (t.params, t.values) == (params, values)
+    # a new study starts from the family's ladder (the warm start), in the ladder's order
+    ladder = search.FAMILIES["lut"].ladder(search.pipeline.problem_for(out))
+    firsts = [t for t in finished if t.number < len(ladder)]
+    assert len(firsts) >= len(ladder) - 1  # the killed trial may have been one of them
+    assert all(t.user_attrs["config"] == {**ladder[t.number], "k": list(ladder[t.number]["k"])} for t in firsts)
 
 
 def test_bad_storage_is_one_line(lut_study, capsys):
@@ -220,7 +225,8 @@ def test_two_workers_share_a_postgres_study(galvo_run, tmp_path, postgres):
 
 def test_search_verifies_the_front_and_picks(galvo_run, tmp_path, capsys):
     out = _copy_run(galvo_run, tmp_path / "p")
-    assert main(["search", str(out), "--trials", "6", "--families", "poly"]) == 0, capsys.readouterr().err
+    assert main(["search", str(out), "--trials", "6", "--families", "poly", "--no-warm-start"]) == 0, \
+        capsys.readouterr().err
     m = search.pipeline.load_metrics(out)
     s, sel = m["search"], m["selection"]
     tg = sel["target"]
