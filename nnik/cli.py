@@ -147,7 +147,7 @@ def cmd_run(args) -> None:
         else:
             console.print("fitting every implementation family, verifying each family's best on host, avr and pic18 ...")
             try:
-                pipeline.select(out)
+                pipeline.select(out, progress=sys.stderr.isatty())
             finally:
                 print_selection(pipeline.load_metrics(out))
     print_report(out)
@@ -284,7 +284,7 @@ def cmd_select(args) -> None:
     if "max_error" in target and not target["max_error"] > 0:
         raise NnikError(f"--max-error must be > 0, got {target['max_error']}")
     try:
-        pipeline.select(out, families=args.family or None, target=target)
+        pipeline.select(out, families=args.family or None, target=target, progress=sys.stderr.isatty())
     finally:
         print_selection(pipeline.load_metrics(out))
 
