@@ -5,12 +5,15 @@ scenario is refused."""
 
 from __future__ import annotations
 
+import time
+import warnings
 from pathlib import Path
 
 from nnik.errors import NnikError
 
 JOURNAL_FILE = "search.journal"
 FINGERPRINT_ATTR = "scenario_fingerprint"
+RACE_RETRIES = 3
 RDB_SCHEMES = ("postgresql", "postgresql+psycopg2", "postgresql+psycopg", "sqlite")
 
 
@@ -34,11 +37,19 @@ def open_storage(url: str | None, outdir: Path):
         raise NnikError(f"storage URL {url!r}: expected postgresql://USER@HOST:PORT/DB (or sqlite:///FILE)", "--storage")
     if scheme == "postgresql":  # the driver nnik depends on (SQLAlchemy 2.1 would look for psycopg 3)
         url = "postgresql+psycopg2://" + url.split("://", 1)[1]
-    try:
-        return optuna.storages.RDBStorage(url, engine_kwargs=_engine_kwargs(scheme), heartbeat_interval=60,
-                                          grace_period=180)
-    except Exception as exc:  # sqlalchemy's errors: bad URL, unreachable server, bad credentials
-        raise NnikError(f"storage {_redact(url)}: {_first_line(exc)}", "--storage") from None
+    for attempt in range(RACE_RETRIES + 1):
+        try:
+            with warnings.catch_warnings():  # the heartbeat (a dead worker's trial is failed) is "experimental"
+                warnings.simplefilter("ignore", optuna.exceptions.ExperimentalWarning)
+                return optuna.storages.RDBStorage(url, engine_kwargs=_engine_kwargs(scheme), heartbeat_interval=60,
+                                                  grace_period=180)
+        except Exception as exc:  # sqlalchemy's errors: bad URL, unreachable server, bad credentials
+            msg = _first_line(exc)
+            # workers starting together on a new database race to create its tables: the loser retries
+            if attempt < RACE_RETRIES and ("duplicate key" in msg or "already exists" in msg):
+                time.sleep(1.0 + attempt)
+                continue
+            raise NnikError(f"storage {_redact(url)}: {msg}", "--storage") from None
 
 
 def _engine_kwargs(scheme: str) -> dict:

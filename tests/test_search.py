@@ -214,7 +214,7 @@ def test_two_workers_share_a_postgres_study(galvo_run, tmp_path, postgres):
     for p in procs:
         _, err = p.communicate(timeout=600)
         assert p.returncode == 0, err
-    trials = _study(a, postgres).get_trials()
+    trials = [t for t in _study(a, postgres).get_trials() if t.state != TrialState.WAITING]  # ladder queue left
     assert all(t.state in FINISHED for t in trials)  # none left running: none lost
     assert n <= len(trials) <= n + 1  # the other worker may finish the trial it had begun
     assert len({t.number for t in trials}) == len(trials) == len({t._trial_id for t in trials})

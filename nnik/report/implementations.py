@@ -139,7 +139,10 @@ def plot_front(ctx, sel: dict) -> Fig:
     for r in sel["implementations"]:
         pts.append({"family": r["family"], "err": r["pre_max"], "picked": r.get("picked"), "best": True,
                     "measured": {c: (r["cycles"][c], r["flash_bytes"][c]) for c in CHIPS
-                                 if lookup(r, "cycles", c) is not None}})
+                                 if lookup(r, "cycles", c) is not None},
+                    # a best that was not verified (it misses the target) is drawn at its estimate
+                    "estimated": {c: (r["estimate"][c]["cycles"], r["estimate"][c]["flash_bytes"]) for c in CHIPS
+                                  if c in (r.get("estimate") or {})}})
     for r in sel.get("ladder", []):
         if "pre_max" not in r or r.get("model_hash") == best_hash.get(r["family"]):
             continue
