@@ -237,14 +237,15 @@ def search(outdir: Path, trials: int, url: str | None = None, name: str | None =
 def warm(study, outdir: Path, families: list[str]) -> int:
     """Queue every family's ladder (what `nnik run` tries) as the new study's first trials, so the
     search starts from the ladder's points and can only improve on them; returns how many."""
+    from itertools import chain, zip_longest
+
     problem = pipeline.problem_for(outdir)
+    ladders = [[params_of(fam, cfg) for cfg in FAMILIES[fam].ladder(problem)] for fam in families]
     n = 0
-    for fam in families:
-        for cfg in FAMILIES[fam].ladder(problem):
-            p = params_of(fam, cfg)
-            if p is not None:
-                study.enqueue_trial(p, skip_if_exists=True)
-                n += 1
+    for p in chain.from_iterable(zip_longest(*ladders)):  # the families in turn: a short search sees each
+        if p is not None:
+            study.enqueue_trial(p, skip_if_exists=True)
+            n += 1
     return n
 
 
