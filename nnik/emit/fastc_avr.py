@@ -207,11 +207,22 @@ def body(cx, start, out_start) -> str | None:
     else:
         lines += [f"st X+, {r}" for k in range(2) for r in O[k]]
     lines += ["clr r1", "clr %[flag]", "bld %[flag], 0"]
-    asm = "\n".join(f'        "{ln}\\n"' for ln in lines)
     tab_ops = ", ".join(f'[tab{n}] "i" ({cx.table(m, s)})' for (m, s), n in
                         sorted(((key, int(v[5:-1])) for key, v in tabs.items()), key=lambda t: t[1]))
-    clob = ", ".join(f'"{c}"' for c in CLOBBERS)
-    text = [
+    text = asm_statement(lines, tab_ops, CLOBBERS)
+    if not out_asm:
+        text += cx.finish_lines()
+    text.append("    return flag;")
+    return "\n".join(text)
+
+
+def asm_statement(lines: list[str], inputs: str, clobbers) -> list[str]:
+    """One avr-gcc asm statement over an IK call's standard operands: the flag in r24, Z walking
+    in_um, X walking out; ``inputs`` are the input operands (tables), ``clobbers`` the registers
+    written. Shared by every AVR fast path (the MLP kernel, the lut and hybrid families)."""
+    asm = "\n".join(f'        "{ln}\\n"' for ln in lines)
+    clob = ", ".join(f'"{c}"' for c in clobbers)
+    return [
         '    register int8_t flag __asm__("r24");',
         "    const int32_t *pin = in_um;",
         "    int32_t *pout = out;",
@@ -220,10 +231,6 @@ def body(cx, start, out_start) -> str | None:
         asm,
         "        NNIK_AVR_ASM_PURGE",
         '        : [flag] "=&r" (flag), "+z" (pin), "+x" (pout)',
-        f"        : {tab_ops}",
+        f"        : {inputs}",
         f"        : {clob});",
     ]
-    if not out_asm:
-        text += cx.finish_lines()
-    text.append("    return flag;")
-    return "\n".join(text)

@@ -246,20 +246,9 @@ def saved_registers(lines: list[str]) -> int:
 
 
 def wrap(lines: list[str], tabsym: str) -> str:
-    asm = "\n".join(f'        "{ln}\\n"' for ln in lines)
-    clob = ", ".join(f'"{c}"' for c in clobbers(lines))
-    return "\n".join([
-        '    register int8_t flag __asm__("r24");',
-        "    const int32_t *pin = in_um;",
-        "    int32_t *pout = out;",
-        "    __asm__ __volatile__ (",
-        "        NNIK_AVR_ASM_MACROS",
-        asm,
-        "        NNIK_AVR_ASM_PURGE",
-        '        : [flag] "=&r" (flag), "+z" (pin), "+x" (pout)',
-        f'        : [tab] "i" ({tabsym})',
-        f"        : {clob});",
-        "    return flag;"])
+    from nnik.emit.fastc_avr import asm_statement
+
+    return "\n".join([*asm_statement(lines, f'[tab] "i" ({tabsym})', clobbers(lines)), "    return flag;"])
 
 
 def body(impl, ctx, base_hook=None, after_clamp=None) -> str:
