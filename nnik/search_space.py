@@ -11,8 +11,7 @@ from __future__ import annotations
 import dataclasses
 
 from nnik.implementations import Problem
-from nnik.implementations.lut import k_for_nodes
-from nnik.implementations.lut_table import fold_plan
+from nnik.implementations.lut import LutImpl, k_for_nodes
 
 MLP_WIDTHS = (3, 4, 5, 6, 8, 10, 12)
 MLP_TANH = ("default", "lerp32", "lerp64", "lerp_mr", "lerp_mr4", "minimax3_x11", "minimax2_x22", "paper_lsq5")
@@ -42,10 +41,9 @@ def k_range(span: int) -> tuple[int, int]:
 
 
 def spans(problem: Problem) -> dict[str, list[int]]:
-    """Stored span per axis in input units: LUT (after its symmetry folds) and hybrid."""
-    fold, _ = fold_plan(problem, True)
-    lut = [int(problem.hi[a]) if fold[a] else int(problem.hi[a] - problem.lo[a]) for a in range(2)]
-    return {"lut": lut, "hybrid": [int(problem.hi[a] - problem.lo[a]) for a in range(2)]}
+    """Stored span per axis in input units of the lut and hybrid tables (after the symmetry folds)."""
+    span = LutImpl.stored_span(problem)
+    return {"lut": span, "hybrid": span}
 
 
 def suggest(trial, problem: Problem, families: list[str]) -> tuple[str, dict]:

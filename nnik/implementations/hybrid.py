@@ -2,16 +2,24 @@
 residual in a ``lut`` table (:mod:`nnik.implementations.lut_table`). The residual is small, so
 the table's int16 entries carry many more fractional bits than a full table's.
 
-Integer contract (per output o; tx = x - lo_x, ty = y - lo_y after the clamp, unsigned):
+Integer contract (per output o; tx, ty = the table's index coordinates after the clamp,
+unsigned: x - lo_x, or |x| on an axis the table folds):
     base = C + Ax tx + Ay ty               int32, Q``G`` (|Ax|, |Ay| < 2^coef_bits; |base| < 2^31)
-    acc  = the residual table's accumulator, Q``s_t``
+    acc  = the residual table's accumulator, Q``s_t`` (not yet negated)
     total = base + (acc >> (s_t - G))      (or acc 2^(G - s_t) when s_t < G)
+    total = -total for an odd output whose folded input is negative
     out = offset + ((total + 2^(G-1)) >> G), then the DAC clamp; pre = offset + total / 2^G.
 The table is fitted to the exact residual q - offset - base / 2^G of the quantised base.
 
-Knobs: ``k``, ``bits``, ``W``, ``fit`` as in ``lut`` (the table never folds: the base has no
-symmetry), ``base`` = "affine", ``coef_bits`` = 16 | 8: the width of |Ax|, |Ay| (8 halves the
-base's multiplies; the coarser slope is a linear ramp the residual table absorbs exactly).
+Symmetry: where the exact IK is even or odd in an axis whose domain is symmetric about 0, the
+base is fitted in folded coordinates with only the terms that keep that symmetry (an output odd
+in x has no constant and no y term: it must vanish at x = 0), so the residual table folds as the
+``lut`` family's does (a half or quarter table), and an output that depends on one input only
+keeps a 1-D residual table.
+
+Knobs: ``k``, ``bits``, ``W``, ``fit``, ``symmetry``, ``separable`` as in ``lut``, ``base`` =
+"affine", ``coef_bits`` = 16 | 8: the width of |Ax|, |Ay| (8 halves the base's multiplies; the
+coarser slope is a linear ramp the residual table absorbs exactly).
 """
 
 from __future__ import annotations
@@ -20,18 +28,40 @@ import numpy as np
 
 from nnik.errors import NnikError
 from nnik.implementations.c_common import i32
-from nnik.implementations.lut import LutImpl, cell_exponents, cell_ladder, fit_points
-from nnik.implementations.lut_table import Grid, Table, fit_nodes, quantise
+from nnik.implementations.lut import LutImpl, cell_exponents, cell_ladder, fit_points, fold_targets
+from nnik.implementations.lut_table import Grid, Table, dependence, fit_nodes, fold_plan, quantise
 from nnik.implementations.problem import Problem
 
-DEFAULTS = {"bits": 16, "W": 16, "fit": "lsq", "base": "affine", "coef_bits": 16}
+DEFAULTS = {"bits": 16, "W": 16, "fit": "lsq", "base": "affine", "coef_bits": 16, "symmetry": True,
+            "separable": True}
 
 
-def affine_lsq(t: np.ndarray, q: np.ndarray) -> np.ndarray:
-    """(2, 3) float coefficients [c, ax, ay] per output of the least-squares affine map."""
+def base_terms(odd: np.ndarray, dep) -> np.ndarray:
+    """(2, 3) bool: which of [C, Ax, Ay] output o's base may use. Odd in folded x: the sum must
+    vanish at tx = 0, so no C and no Ay; likewise for y. A 1-D output (dep "y" / "x") has no
+    slope along the other axis, so its residual stays 1-D."""
+    use = np.ones((2, 3), dtype=bool)
+    for o in range(2):
+        if odd[o, 0]:
+            use[o, [0, 2]] = False
+        if odd[o, 1]:
+            use[o, [0, 1]] = False
+        if dep[o] == "y":
+            use[o, 1] = False
+        elif dep[o] == "x":
+            use[o, 2] = False
+    return use
+
+
+def affine_lsq(t: np.ndarray, q: np.ndarray, use: np.ndarray) -> np.ndarray:
+    """(2, 3) float coefficients [c, ax, ay] per output of the least-squares affine map, with
+    only the terms `use` allows (the others 0)."""
     m = np.column_stack([np.ones(len(t)), t[:, 0], t[:, 1]])
-    coef, *_ = np.linalg.lstsq(m, q, rcond=None)
-    return coef.T
+    coef = np.zeros((2, 3))
+    for o in range(2):
+        if use[o].any():
+            coef[o, use[o]] = np.linalg.lstsq(m[:, use[o]], q[:, o], rcond=None)[0]
+    return coef
 
 
 class HybridImpl(LutImpl):
@@ -47,10 +77,10 @@ class HybridImpl(LutImpl):
 
     @classmethod
     def ladder(cls, problem: Problem) -> list[dict]:
-        """Residual tables with cells halving from about 4 to at most 40 nodes per axis: an
-        8-bit cell fraction with 8-bit base slopes (fastest) and Q16 with 16-bit slopes (minimax
-        nodes up to 14 per axis)."""
-        span = [int(problem.hi[a] - problem.lo[a]) for a in range(2)]
+        """Residual tables with cells halving from about 4 to at most 40 nodes per stored axis:
+        an 8-bit cell fraction with 8-bit base slopes (fastest) and Q16 with 16-bit slopes
+        (minimax nodes up to 14 per axis)."""
+        span = cls.stored_span(problem)
         out = []
         for k in cell_ladder(span):
             # minimax only on exact samples of small tables (on measured rows it fits the noise)
@@ -62,26 +92,28 @@ class HybridImpl(LutImpl):
 
     @classmethod
     def fit(cls, problem: Problem, config: dict) -> "HybridImpl":
-        cfg = {**DEFAULTS, **config, "symmetry": False}
+        cfg = {**DEFAULTS, **config}
         if cfg["base"] != "affine":
             raise NnikError(f"unknown hybrid base {cfg['base']!r} (affine)")
         if cfg["coef_bits"] not in (8, 16):
             raise NnikError(f"hybrid coef_bits {cfg['coef_bits']!r}: must be 8 or 16")
         a_max = (1 << cfg["coef_bits"]) - 1  # |A|: 8 bits halves the base's multiplies
         cfg["k"] = cell_exponents(cfg)
-        lo, hi = problem.lo, problem.hi
-        span = (hi - lo).astype(np.float64)
-        grid = Grid.make(lo, hi, cfg["k"], (False, False), int(cfg["W"]))
+        fold, odd = fold_plan(problem, bool(cfg["symmetry"]))
+        dep = dependence(problem, bool(cfg["separable"]))
+        grid = Grid.make(problem.lo, problem.hi, cfg["k"], fold, int(cfg["W"]))
         pts, q = fit_points(problem, grid)
-        pts = np.asarray(pts, dtype=np.float64)
-        t = pts - lo
-        coef = affine_lsq(t, q)
-        offset = np.rint((q.max(0) + q.min(0)) / 2).astype(np.int64)
+        t, qf = fold_targets(grid, odd, np.asarray(pts, dtype=np.float64), q)
+        span = np.array(grid.span, dtype=np.float64)
+        use = base_terms(odd, dep)
+        coef = affine_lsq(t, qf, use)
+        offset = np.array([0 if odd[o].any() else int(np.rint((q[:, o].max() + q[:, o].min()) / 2))
+                           for o in range(2)], dtype=np.int64)
         base, G = [], []
         for o in range(2):
             c, ax, ay = coef[o]
-            c = c - offset[o]
-            amp = float(np.abs(q[:, o] - offset[o]).max()) * 1.5 + 1.0
+            c = c - offset[o] if use[o, 0] else 0.0
+            amp = float(np.abs(qf[:, o] - offset[o]).max()) * 1.5 + 1.0
             g = None
             for gg in range(24, -1, -1):
                 A = np.rint(np.array([ax, ay]) * 2.0**gg)
@@ -98,10 +130,10 @@ class HybridImpl(LutImpl):
         base = np.array(base, dtype=np.int64)
         G = np.array(G)
         bval = (base[:, 0][None, :] + t[:, :1] * base[:, 1][None, :] + t[:, 1:] * base[:, 2][None, :]) / 2.0**G
-        resid = q - offset - bval
-        vals, _ = fit_nodes(grid, t, resid, np.zeros((2, 2), bool), cfg["fit"], measured=not problem.analytic)
-        tab = quantise(grid, vals, int(cfg["bits"]), np.zeros((2, 2), bool), cfg.get("fb"))
-        for o in range(2):  # the table's offset moves into the base constant
+        resid = qf - offset - bval
+        vals, _ = fit_nodes(grid, t, resid, odd, cfg["fit"], measured=not problem.analytic, dep=dep)
+        tab = quantise(grid, vals, int(cfg["bits"]), odd, cfg.get("fb"), dep=dep)
+        for o in range(2):  # the table's offset (0 for an odd output) moves into the base constant
             base[o, 0] += int(tab.offset[o]) << int(G[o])
         tab.offset = (0, 0)
         im = cls(problem, cfg, tab, base, G, offset)
@@ -116,8 +148,7 @@ class HybridImpl(LutImpl):
     def _check_range(self) -> None:
         """|base| is largest at a corner of the domain (it is affine); the table adds at most
         max|e| 2^-fb; the sum and the rounding half must stay below 2^31."""
-        p = self.problem
-        span = p.hi - p.lo
+        span = self.table.grid.span
         corners = np.array([[0, 0], [span[0], 0], [0, span[1]], [span[0], span[1]]], dtype=np.float64)
         for o in range(2):
             b = np.abs(self.base[o, 0] + corners @ self.base[o, 1:].astype(np.float64)).max()
@@ -127,13 +158,14 @@ class HybridImpl(LutImpl):
 
     def total(self, in_units: np.ndarray) -> np.ndarray:
         c, _ = self.problem.clamp(in_units)
-        acc = self.table.acc(c)
-        t = c - self.problem.lo
+        acc = self.table.acc(c, flip=False)
+        t, neg = self.table.grid.t(c)
         out = np.empty(acc.shape, dtype=np.int64)
         for o in range(2):
             b = self.base[o, 0] + self.base[o, 1] * t[:, 0] + self.base[o, 2] * t[:, 1]
             al = self.align[o]
-            out[:, o] = b + ((acc[:, o] >> al) if al >= 0 else acc[:, o] * (1 << -al))
+            tot = b + ((acc[:, o] >> al) if al >= 0 else acc[:, o] * (1 << -al))
+            out[:, o] = np.where(self.table.flips(neg, o), -tot, tot)
         return out
 
     def run(self, in_units: np.ndarray):
@@ -195,9 +227,7 @@ class HybridImpl(LutImpl):
         return estimate(self, target)
 
     def describe(self) -> str:
-        g = self.table.grid
-        return (f"hybrid affine + residual lut {g.n[0]}x{g.n[1]} int{self.table.bits} (cells 2^{g.k[0]} x "
-                f"2^{g.k[1]}, Q{g.W} fraction, {self.config.get('fit', 'lsq')})")
+        return f"hybrid affine + residual lut {self.table_text()}"
 
 
 IMPLEMENTATION = HybridImpl

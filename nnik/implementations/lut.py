@@ -116,8 +116,7 @@ class LutImpl(Implementation):
         """Cells halving from about 4 nodes per stored axis up to 40 nodes; per size an int16
         table with an 8-bit cell fraction (fastest), a Q16 int16 table (minimax nodes up to 14
         per axis) and a Q16 int32 table (wide outputs, DACs)."""
-        fold, _ = fold_plan(problem, True)
-        span = [int(problem.hi[a]) if fold[a] else int(problem.hi[a] - problem.lo[a]) for a in range(2)]
+        span = cls.stored_span(problem)
         out = []
         for k in cell_ladder(span):
             # minimax only on exact samples of small tables (on measured rows it fits the noise)
@@ -126,6 +125,12 @@ class LutImpl(Implementation):
                     {"k": k, "bits": 16, "W": 16, "fit": "minimax" if small else "lsq", "symmetry": True},
                     {"k": k, "bits": 32, "W": 16, "fit": "lsq", "symmetry": True}]
         return out
+
+    @staticmethod
+    def stored_span(problem: Problem, symmetry: bool = True) -> list[int]:
+        """Span of the stored table per axis (after the symmetry folds), input units."""
+        fold, _ = fold_plan(problem, symmetry)
+        return [int(problem.hi[a]) if fold[a] else int(problem.hi[a] - problem.lo[a]) for a in range(2)]
 
     @classmethod
     def fit(cls, problem: Problem, config: dict) -> "LutImpl":
@@ -188,14 +193,18 @@ class LutImpl(Implementation):
 
         return estimate(self, target)
 
-    def describe(self) -> str:
+    def table_text(self) -> str:
+        """The table in words: nodes, 1-D outputs, entries, cells, fraction, fit, folds."""
         t = self.table
         g = t.grid
         fold = "".join(a for a, f in zip("xy", g.fold) if f)
         sym = f", folded in {fold}" if fold else ""
         one = "".join(f", {self.problem.outputs[o]} 1-D in {t.dep[o]}" for o in range(2) if t.dep[o] != "xy")
-        return (f"lut {g.n[0]}x{g.n[1]}{one} int{t.bits} (cells 2^{g.k[0]} x 2^{g.k[1]}, Q{g.W} fraction, "
+        return (f"{g.n[0]}x{g.n[1]}{one} int{t.bits} (cells 2^{g.k[0]} x 2^{g.k[1]}, Q{g.W} fraction, "
                 f"{self.config.get('fit', 'lsq')}{sym})")
+
+    def describe(self) -> str:
+        return f"lut {self.table_text()}"
 
 
 IMPLEMENTATION = LutImpl

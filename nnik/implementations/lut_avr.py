@@ -83,15 +83,14 @@ def _align(k: int) -> list[str]:
 
 def input_stage(impl, flipmask, after_clamp=None) -> list[str]:
     """Both inputs: clamp (T flag), fold, align; leaves ix in r6, fx in r2(:r3), iy in r20,
-    fy in r4(:r5). after_clamp(a) -> lines run with t = x - lo in r20:r19:r18."""
+    fy in r4(:r5). after_clamp(a) -> lines run with the table's coordinate t (x - lo, or |x| on
+    a folded axis; unsigned 24-bit) in r20:r19:r18."""
     p = impl.problem
     g = impl.table.grid
     code = ["clr " + ZERO, "clt"] + (["clr " + NEG] if any(flipmask) else [])
     for a in range(2):
         lo, hi = int(p.lo[a]), int(p.hi[a])
         code.append(f"nnik_inw {', '.join(A)}, {lo}, {hi - lo}, {U[0]}")
-        if after_clamp is not None:
-            code += after_clamp(a)
         if g.fold[a]:
             code += add_const(A[:3], lo)  # t = w + lo = x (signed 24-bit)
             code += ["brpl 1f"] + negate(A[:3])
@@ -100,6 +99,8 @@ def input_stage(impl, flipmask, after_clamp=None) -> list[str]:
             code.append("1:")
         elif g.origin[a] != lo:
             raise AssertionError("unfolded axis starts at lo")
+        if after_clamp is not None:
+            code += after_clamp(a)
         code += _align(g.k[a])
         if a == 0:
             code += [f"mov {W11[0]}, {A[2]}"]
@@ -171,15 +172,15 @@ def _acc_init(B: int, W: int) -> list[str]:
             f"mov {A[3]}, {E[1]}", f"lsl {A[3]}", f"sbc {A[3]}, {A[3]}"]
 
 
-def output_acc(tab, o: int) -> list[str]:
+def output_acc(tab, o: int, negate_odd: bool = True) -> list[str]:
     """Table part of output o: acc in A (Z at the cell of output o on entry; on exit Z is the
-    cell + NX + 2 entries)."""
+    cell + NX + 2 entries); negate_odd=False leaves an odd output's negation to the caller."""
     g = tab.grid
     B = tab.bits // 8
     W = g.W
     skip = ["adiw r30, 2"] if B == 4 else []
     if tab.dep[o] != "xy":
-        return output_1d(tab, o) + _combine(tab, o)
+        return output_1d(tab, o) + _combine(tab, o, negate_odd)
     code = [f"lpm {E[0]}, Z+", f"lpm {E[1]}, Z+"] + _acc_init(B, W)
     code += [f"lpm {D[0]}, Z+", f"lpm {D[1]}, Z+"] + skip + [f"sub {D[0]}, {E[0]}", f"sbc {D[1]}, {E[1]}"]
     code += _macsu(W, AW)
@@ -189,11 +190,11 @@ def output_acc(tab, o: int) -> list[str]:
     code += [f"movw {D[0]}, {F[0]}", f"sub {D[0]}, {E[0]}", f"sbc {D[1]}, {E[1]}"] + _macsu(W, FY)
     code += [f"lpm {D[0]}, Z+", f"lpm {D[1]}, Z+"] + skip + [f"sub {D[0]}, {F[0]}", f"sbc {D[1]}, {F[1]}"]
     code += _macsu(W, W11)
-    return code + _combine(tab, o)
+    return code + _combine(tab, o, negate_odd)
 
 
-def _combine(tab, o: int) -> list[str]:
-    """int32 entries: acc = e00 + (S >> W); then the odd output's negation."""
+def _combine(tab, o: int, negate_odd: bool = True) -> list[str]:
+    """int32 entries: acc = e00 + (S >> W); then the odd output's negation (if negate_odd)."""
     B = tab.bits // 8
     W = tab.grid.W
     code = []
@@ -206,9 +207,12 @@ def _combine(tab, o: int) -> list[str]:
             code += [f"mov {D[0]}, {A[1]}", f"mov {D[1]}, {A[2]}", f"mov {F[0]}, {A[3]}", f"clr {F[1]}",
                      f"sbrc {F[0]}, 7", f"com {F[1]}", f"movw {A[0]}, {E[0]}", f"movw {A[2]}, {E[2]}",
                      f"add {A[0]}, {D[0]}", f"adc {A[1]}, {D[1]}", f"adc {A[2]}, {F[0]}", f"adc {A[3]}, {F[1]}"]
-    if tab.odd[o].any():
-        code += [f"sbrs {NEG}, {o}", "rjmp 1f"] + negate(A) + ["1:"]
-    return code
+    return code + (odd_negation(tab, o) if negate_odd else [])
+
+
+def odd_negation(tab, o: int) -> list[str]:
+    """A = -A where output o is odd in a folded axis whose input was negative."""
+    return [f"sbrs {NEG}, {o}", "rjmp 1f"] + negate(A) + ["1:"] if tab.odd[o].any() else []
 
 
 def finish(o: int, shift: int, offset: int, code_range) -> list[str]:
@@ -272,9 +276,9 @@ def lines(impl, ctx, base_hook=None, after_clamp=None) -> list[str]:
         elif o == 1:
             k1 = ctx["toff"][1] * B
             code += [f"movw r30, {P1[0]}", f"subi r30, lo8(-(%[tab] + {k1}))", f"sbci r31, hi8(-(%[tab] + {k1}))"]
-        code += output_acc(tab, o)
-        if base_hook is not None:
-            code += base_hook(o)
+        code += output_acc(tab, o, negate_odd=base_hook is None)
+        if base_hook is not None:  # the base first, then base + residual negated together
+            code += base_hook(o) + odd_negation(tab, o)
         fin = impl.final_stage()
         code += finish(o, fin["final_shift"][o], fin["final_off_int"][o], impl.problem.code_range)
     code += ["clr r1", "clr %[flag]", "bld %[flag], 0"]

@@ -128,8 +128,6 @@ def table_part(impl, asm: Asm, flipmask, after_clamp=None) -> list[str]:
         items.append(("macro", f'NNIK_P18_INW("{asm.at("v", 4 * a)}", "{asm.at("fl")}", {lo}, {hi - lo}, '
                                f'"{asm.sym}_in{a}")'))
         v = [asm.at("v", 4 * a + i) for i in range(3)]
-        if after_clamp is not None:
-            after_clamp(asm, a)
         if g.fold[a]:
             m = lo & 0xFFFFFF  # t = w + lo = x (signed 24-bit), then |x|
             for i in range(3):
@@ -140,6 +138,8 @@ def table_part(impl, asm: Asm, flipmask, after_clamp=None) -> list[str]:
             if flipmask[a]:
                 asm += [f"movlw {flipmask[a]}", f"xorwf {asm.at('ng')}, F, B"]
             asm += [f"{lab}:"]
+        if after_clamp is not None:  # t = x - lo, or |x| on a folded axis
+            after_clamp(asm, a)
         _align(asm, a, g.k[a])
         if a == 0:
             asm += [f"movff {v[2]}, {asm.at('ix')}"]
@@ -197,7 +197,7 @@ def table_offsets(tab) -> list[int]:
     return [0, tab.stored(0).size]
 
 
-def output_acc(impl, asm: Asm, o: int) -> None:
+def output_acc(impl, asm: Asm, o: int, negate_odd: bool = True) -> None:
     tab = impl.table
     g = tab.grid
     W = g.W
@@ -226,13 +226,13 @@ def output_acc(impl, asm: Asm, o: int) -> None:
             f"subwfb {at('d', 1)}, F, B"]
     if tab.dep[o] == "y":
         asm.mac("fy", W)
-        return combine(impl, asm, o)
+        return combine(impl, asm, o, negate_odd)
     if tab.dep[o] == "x":  # fx = a + w11 into the scratch t
         asm += [f"movf {at('aw')}, W, B", f"addwf {at('w11')}, W, B", f"movwf {at('t')}, B"]
         if W == 16:
             asm += [f"movf {at('aw', 1)}, W, B", f"addwfc {at('w11', 1)}, W, B", f"movwf {at('t', 1)}, B"]
         asm.mac("t", W)
-        return combine(impl, asm, o)
+        return combine(impl, asm, o, negate_odd)
     asm.mac("aw", W)
     asm.tblptr_add(g.n[0] * B - 2 * B)
     asm.read("f", 2, skip)
@@ -243,11 +243,11 @@ def output_acc(impl, asm: Asm, o: int) -> None:
     asm += [f"movf {at('f', 0)}, W, B", f"subwf {at('d', 0)}, F, B", f"movf {at('f', 1)}, W, B",
             f"subwfb {at('d', 1)}, F, B"]
     asm.mac("w11", W)
-    combine(impl, asm, o)
+    combine(impl, asm, o, negate_odd)
 
 
-def combine(impl, asm: Asm, o: int) -> None:
-    """int32 entries: acc = e00 + (S >> W); then the odd output's negation."""
+def combine(impl, asm: Asm, o: int, negate_odd: bool = True) -> None:
+    """int32 entries: acc = e00 + (S >> W); then the odd output's negation (if negate_odd)."""
     tab = impl.table
     W = tab.grid.W
     B = tab.bits // 8
@@ -259,9 +259,15 @@ def combine(impl, asm: Asm, o: int) -> None:
         for i in range(4):
             asm += [f"movf {srcs[i]}, W, B", f"{'addwf' if i == 0 else 'addwfc'} {at('e', i)}, F, B"]
         asm += [f"movff {at('e', i)}, {at('a', i)}" for i in range(4)]
-    if tab.odd[o].any():
+    if negate_odd:
+        odd_negation(impl, asm, o)
+
+
+def odd_negation(impl, asm: Asm, o: int) -> None:
+    """a = -a where output o is odd in a folded axis whose input was negative."""
+    if impl.table.odd[o].any():
         lab = asm.label()
-        asm += [f"btfss {at('ng')}, {o}, B", f"bra {lab}"]
+        asm += [f"btfss {asm.at('ng')}, {o}, B", f"bra {lab}"]
         asm.negate("a", 4)
         asm += [f"{lab}:"]
 
@@ -339,8 +345,9 @@ def items(impl, ctx, base_hook=None, after_clamp=None) -> list:
     asm = Asm(f"_{w}")
     items = table_part(impl, asm, ctx["flipmask"], after_clamp)
     for o in range(2):
-        output_acc(impl, asm, o)
-        if base_hook is not None:
+        output_acc(impl, asm, o, negate_odd=base_hook is None)
+        if base_hook is not None:  # the base first, then base + residual negated together
             base_hook(asm, o)
+            odd_negation(impl, asm, o)
         finish(impl, asm, o, items)
     return items

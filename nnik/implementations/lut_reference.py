@@ -32,6 +32,8 @@ REFERENCES = {
         ("corexy_nonlinear", {"k": [13, 13], "bits": 16, "W": 8}, "fit"),
         ("corexy_nonlinear", {"k": [15, 15], "bits": 32, "W": 16}, "validate"),
         ("galvo_cba2012", {"k": [14, 14], "bits": 16, "W": 16}, "validate"),
+        ("galvo_cba2012", {"k": [13, 13], "bits": 16, "W": 16, "symmetry": True, "separable": True}, "fit"),
+        ("galvo_dual_xy2", {"k": [15, 15], "bits": 16, "W": 8, "symmetry": True, "separable": True}, "validate"),
     ],
 }
 
@@ -50,7 +52,7 @@ def reference_impl(cls, scenario: str, cfg: dict):
     family = cls.family
     p = _problem(scenario)
     rng = np.random.default_rng(sum(cfg["k"]) * 7 + cfg["bits"] + cfg["W"])
-    sym = cfg.get("symmetry", False) and family == "lut"
+    sym = cfg.get("symmetry", False)
     fold, odd = fold_plan(p, sym)
     grid = Grid.make(p.lo, p.hi, cfg["k"], fold, cfg["W"])
     ny, nx = grid.n[1], grid.n[0]
@@ -59,7 +61,7 @@ def reference_impl(cls, scenario: str, cfg: dict):
     if cfg["bits"] == 32:
         ent = ent * 3 + 70000
     offs = tuple(0 if odd[o].any() else 5 + 11 * o for o in range(2))
-    dep = dependence(p, family == "lut" and cfg.get("separable", True))
+    dep = dependence(p, cfg.get("separable", family == "lut"))
     for o in range(2):  # a 1-D output: replicated along the other axis
         if dep[o] == "y":
             ent[o] = ent[o][:, :1]
@@ -69,9 +71,12 @@ def reference_impl(cls, scenario: str, cfg: dict):
     full = {**cfg, "fit": "lsq"}
     if family == "lut":
         return cls(p, full, tab)
+    from nnik.implementations.hybrid import base_terms
+
     tab.offset = (0, 0)
     wide = 10 if cfg["W"] == 16 else 1  # 16-bit and 8-bit base slopes
     base = np.array([[12345 << 4, 211 * wide, -187 * wide], [-777 << 4, -95 * wide, 250 * wide]], dtype=np.int64)
+    base[~base_terms(odd, dep)] = 0  # the terms a folded or 1-D residual allows
     return cls(p, {**full, "base": "affine"}, tab, base, np.array([12, 13]), np.array([100, -40]))
 
 

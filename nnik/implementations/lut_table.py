@@ -337,8 +337,10 @@ class Table:
     def nbytes(self) -> int:
         return int(sum(self.stored(o).size for o in range(2)) * self.bits // 8)
 
-    def acc(self, c: np.ndarray) -> np.ndarray:
-        """Clamped inputs (N, 2) -> acc (N, 2) int64 (value 2^-s, before the offset)."""
+    def acc(self, c: np.ndarray, flip: bool = True) -> np.ndarray:
+        """Clamped inputs (N, 2) -> acc (N, 2) int64 (value 2^-s, before the offset); with
+        flip=False the odd outputs' negation is left to the caller (the hybrid adds its base
+        first)."""
         g = self.grid
         t, neg = g.t(c)
         (ix, iy), (fx, fy) = g.index(t)
@@ -353,12 +355,16 @@ class Table:
             s = aw * (e10 - e00) + fy * (e01 - e00) + w11 * (e11 - e01)
             assert np.abs(s).max(initial=0) < 2**31
             acc = e00 * (1 << W) + s if self.bits == 16 else e00 + (s >> W)
-            flip = np.zeros(len(t), dtype=bool)
-            for a in range(2):
-                if self.odd[o, a]:
-                    flip ^= neg[:, a]
-            out[:, o] = np.where(flip, -acc, acc)
+            out[:, o] = np.where(self.flips(neg, o), -acc, acc) if flip else acc
         return out
+
+    def flips(self, neg: np.ndarray, o: int) -> np.ndarray:
+        """(N,) bool: output o is negated (odd in a folded axis whose input is negative)."""
+        f = np.zeros(len(neg), dtype=bool)
+        for a in range(2):
+            if self.odd[o, a]:
+                f ^= neg[:, a]
+        return f
 
 
 def quantise(grid: Grid, vals: np.ndarray, bits: int, odd: np.ndarray, fb_force: int | None = None,
