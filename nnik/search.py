@@ -8,10 +8,12 @@ max_flash_bytes are the sampler's constraints. A configuration that cannot be bu
 trial, its reason recorded. The study lives in OUTDIR/search.journal or a database
 (:mod:`nnik.search_storage`); rerunning continues it up to --trials finished trials.
 
-After the search the feasible Pareto front is refitted, each family's cheapest point on it is
-verified on the host and both simulated chips and the pick is chosen and exported exactly as
-:mod:`nnik.selection` does; metrics["selection"] (the front as its "ladder") and
-metrics["search"] are written. Only the CLI imports this module.
+After the search the Pareto front is refitted; each family's cheapest point on the feasible
+front gets the full checks of :mod:`nnik.selection` (host, both simulated chips, portable paths),
+every other front point that meets max_error (up to a cap) the host and the chips' fast path
+(:mod:`nnik.search_front`); the pick is chosen and exported exactly as :mod:`nnik.selection`
+does; metrics["selection"] (the refitted front as its "ladder") and metrics["search"] (the front's
+rows with what was measured) are written. Only the CLI imports this module.
 """
 
 from __future__ import annotations
@@ -28,6 +30,7 @@ from nnik.errors import NnikError
 from nnik.implementations import FAMILIES
 from nnik.implementations.accuracy import accuracy
 from nnik.implementations.base import TARGETS
+from nnik.search_front import config_key, verify_front
 from nnik.search_space import fast_problem, params_of, suggest
 from nnik.search_storage import open_storage, open_study, storage_kind
 
@@ -262,7 +265,7 @@ def front_trials(study, target: dict, feasible_only: bool = False) -> list:
     front = [t for t in pool if not any(_dominates(o.values, t.values) for o in pool)]
     uniq = {}
     for t in sorted(front, key=lambda t: (t.values[1], t.values[2], t.values[0], t.number)):
-        uniq.setdefault(json.dumps([t.user_attrs["family"], t.user_attrs["config"]], sort_keys=True), t)
+        uniq.setdefault(config_key(t.user_attrs["family"], t.user_attrs["config"]), t)
     return list(uniq.values())
 
 
@@ -304,7 +307,8 @@ def _candidate(problem, fam: str, cfg: dict) -> sel.Candidate:
 
 
 def finish(outdir: Path, study, url: str | None, info: dict, progress: bool = True) -> dict:
-    """Refit the front, verify each family's cheapest point on it, pick, export, write metrics."""
+    """Refit the front, verify each family's cheapest point on it (full checks) and the rest of the
+    front that meets max_error (fast path), pick, export, write metrics."""
     from optuna.trial import TrialState
     from tqdm import tqdm
 
@@ -329,6 +333,9 @@ def finish(outdir: Path, study, url: str | None, info: dict, progress: bool = Tr
         for c in tqdm([c for c in bests.values() if c.meets(target["max_error"])], desc="verify family bests",
                       unit="family", disable=not progress, leave=False):
             sel.verify_candidate(c, c_dir / sel.ALT_DIR / c.family, (outdir / "targets" / "families").resolve())
+    rows = front_rows(study, target)
+    by_key = {config_key(c.family, c.config): c for c in cands}
+    verify_info = verify_front(outdir, rows, by_key, bests, target, c_dir / sel.ALT_DIR, progress)
     for c in bests.values():
         if not c.checks:  # shown with its estimate only
             why = {"not_run": f"misses max_error {target['max_error']:g}: not verified"}
@@ -336,6 +343,9 @@ def finish(outdir: Path, study, url: str | None, info: dict, progress: bool = Tr
     pick = sel.choose(bests, target) if reachable else None
     if reachable:
         sel.write_choice(c_dir, bests, pick)
+    picked = None if pick is None else (pick.family, pick.impl.source_hash())
+    for r in rows:
+        r["picked"] = (r["family"], r.get("model_hash")) == picked
     states = {s.name.lower(): len(study.get_trials(deepcopy=False, states=(s,))) for s in TrialState}
     section = {
         "target": target, "input_unit_um": problem.unit_um, "check_points": int(len(problem.check[0])),
@@ -346,7 +356,7 @@ def finish(outdir: Path, study, url: str | None, info: dict, progress: bool = Tr
                                            "model_hash": pick.impl.source_hash(), "file": f"{problem.name}.c"},
     }
     search_section = {"study": study.study_name, "storage": storage_kind(url), "trials": states, **info,
-                      "feasible_front": len(ok_front), "front": front_rows(study, target),
+                      "feasible_front": len(ok_front), "front": rows, "front_verified": verify_info,
                       "front_families": sorted({t.user_attrs["family"] for t in front})}
     pipeline.write_metrics(outdir, {"selection": section, "search": search_section})
     if pick is None:

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from nnik.report import (accuracy, files, implementations, jobs, references, scenario, summary, tanh, targets,
-                         training, verification)
+from nnik.report import (accuracy, files, implementations, jobs, references, scenario, search_front, summary, tanh,
+                         targets, training, verification)
 from nnik.report.context import Context
 from nnik.report.document import Section
 from nnik.report.inputs import Inputs, load_inputs
@@ -13,15 +13,16 @@ from nnik.report.render import render_html, render_markdown
 
 REPORT_DIRNAME = "report"
 # the sections, in the order the report shows them: each module has build(ctx) -> Section and
-# may list the PNGs it writes in PNGS
-SECTIONS = (summary, implementations, jobs, scenario, accuracy, verification, tanh, targets, training, references,
-            files)
+# may list the PNGs it writes in PNGS (search_front: only with a search; its picture is the first)
+SECTIONS = (summary, search_front, implementations, jobs, scenario, accuracy, verification, tanh, targets, training,
+            references, files)
 ALL_PNGS = tuple(png for mod in SECTIONS for png in getattr(mod, "PNGS", ()))
 
 
 def build_sections(inp: Inputs, out_dir: Path) -> list[Section]:
+    """Every section in order; a module whose build returns None has nothing to show for this run."""
     ctx = Context(inp, out_dir)
-    return [mod.build(ctx) for mod in SECTIONS]
+    return [sec for sec in (mod.build(ctx) for mod in SECTIONS) if sec is not None]
 
 
 def write_report(model_dir: Path, out_dir: Path | None = None) -> Path:

@@ -67,6 +67,7 @@ class Section:
     tables: list[Table] = field(default_factory=list)
     figures: list[Fig] = field(default_factory=list)
     verdicts: list[tuple[str, str]] = field(default_factory=list)  # (cls "good"|"bad"|"info", text)
+    figures_first: bool = False  # the pictures above the paragraphs and tables (a section led by its figure)
 
 
 def finite(v) -> bool:

@@ -131,27 +131,37 @@ def _hollow(sel: dict) -> str:
     return "search's Pareto front" if sel.get("source") == "search" else "ladder"
 
 
+def estimated_costs(r: dict) -> dict:
+    """chip -> (estimated cycles, estimated flash) of a row carrying "estimate"."""
+    return {c: (r["estimate"][c]["cycles"], r["estimate"][c]["flash_bytes"]) for c in CHIPS
+            if c in (r.get("estimate") or {})}
+
+
+def best_point(r: dict) -> dict:
+    """A family's best (a selection row) as a point of the families picture."""
+    return {"family": r["family"], "err": r["pre_max"], "picked": r.get("picked"), "best": True,
+            "measured": {c: (r["cycles"][c], r["flash_bytes"][c]) for c in CHIPS if lookup(r, "cycles", c) is not None},
+            # a best that was not verified (it misses the target) is drawn at its estimate
+            "estimated": estimated_costs(r)}
+
+
+def float_ik_cycles(ctx) -> dict:
+    """chip -> measured cycles of the float math.h IK (targets.<chip>.baselines.float), where measured."""
+    cyc = {c: lookup(ctx.m, "targets", c, "baselines", "float", "cycles") for c in CHIPS}
+    return {c: v for c, v in cyc.items() if v}
+
+
 def plot_front(ctx, sel: dict) -> Fig:
     from nnik.report.implementations_plot import families_front
 
-    pts = []
+    pts = [best_point(r) for r in sel["implementations"]]
     best_hash = {r["family"]: r.get("model_hash") for r in sel["implementations"]}
-    for r in sel["implementations"]:
-        pts.append({"family": r["family"], "err": r["pre_max"], "picked": r.get("picked"), "best": True,
-                    "measured": {c: (r["cycles"][c], r["flash_bytes"][c]) for c in CHIPS
-                                 if lookup(r, "cycles", c) is not None},
-                    # a best that was not verified (it misses the target) is drawn at its estimate
-                    "estimated": {c: (r["estimate"][c]["cycles"], r["estimate"][c]["flash_bytes"]) for c in CHIPS
-                                  if c in (r.get("estimate") or {})}})
     for r in sel.get("ladder", []):
         if "pre_max" not in r or r.get("model_hash") == best_hash.get(r["family"]):
             continue
-        pts.append({"family": r["family"], "err": r["pre_max"],
-                    "estimated": {c: (r["estimate"][c]["cycles"], r["estimate"][c]["flash_bytes"]) for c in CHIPS
-                                  if c in r.get("estimate", {})}})
-    float_ik = {c: lookup(ctx.m, "targets", c, "baselines", "float", "cycles") for c in CHIPS}
+        pts.append({"family": r["family"], "err": r["pre_max"], "estimated": estimated_costs(r)})
     families_front(ctx.out / PNG_FRONT, points=pts, chips=CHIPS, max_error=sel["target"]["max_error"], unit=ctx.unit,
-                   float_ik={k: v for k, v in float_ik.items() if v}, title=f"{ctx.m.get('name')}: error against cost, "
+                   float_ik=float_ik_cycles(ctx), title=f"{ctx.m.get('name')}: error against cost, "
                    f"every family (filled: measured best; hollow: {_hollow(sel)}, estimated)")
     return Fig(PNG_FRONT, "error against cycles and flash per family",
                "Pre-rounding max error (log) against cycles (top) and flash (bottom) on each chip. The pick is "

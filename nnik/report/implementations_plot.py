@@ -11,7 +11,7 @@ from pathlib import Path
 from typing import Mapping, Sequence
 
 import numpy as np
-from matplotlib.ticker import NullFormatter
+from matplotlib.ticker import LogFormatter
 
 from nnik.report.plots import _figure, _save
 
@@ -22,7 +22,8 @@ OTHER = ("#7f7f7f", "x")
 def families_front(path: Path, *, points: Sequence[Mapping], chips: Sequence[str], max_error: float, unit: str,
                    float_ik: Mapping[str, float], title: str) -> Path:
     """points: dicts with family, err, measured {chip: (cycles, flash)} or estimated {...},
-    picked (bool), best (bool). float_ik: chip -> cycles of the float math.h IK."""
+    picked (bool), best (bool), label (optional: written beside the point, measured or not).
+    float_ik: chip -> cycles of the float math.h IK."""
     fig = _figure(5.2 * len(chips), 7.4)
     axes = fig.subplots(2, len(chips), squeeze=False)
     for j, chip in enumerate(chips):
@@ -41,9 +42,10 @@ def families_front(path: Path, *, points: Sequence[Mapping], chips: Sequence[str
                     ax.scatter([x], [p["err"]], marker="o", s=320, facecolors="none", edgecolors="k", linewidths=1.6,
                                zorder=4)
                     ax.annotate("pick", (x, p["err"]), xytext=(8, 8), textcoords="offset points", fontsize=8)
-                elif p["family"] == "mlp" and p.get("best") and filled:
-                    ax.annotate("MLP best", (x, p["err"]), xytext=(8, -12), textcoords="offset points", fontsize=8,
-                                color=col)
+                elif p.get("label") or (p["family"] == "mlp" and p.get("best") and filled):
+                    # to the left: the labelled MLP is usually the costliest point, at the right edge
+                    ax.annotate(p.get("label") or "MLP best", (x, p["err"]), xytext=(-8, -12),
+                                textcoords="offset points", fontsize=8, color=col, ha="right").set_in_layout(False)
             ax.axhline(max_error, color="k", ls=":", lw=1)
             ax.text(0.01, max_error, f" max_error {max_error:g}", transform=ax.get_yaxis_transform(), va="bottom",
                     fontsize=7)
@@ -53,12 +55,14 @@ def families_front(path: Path, *, points: Sequence[Mapping], chips: Sequence[str
                         fontsize=7, color="#8c564b", rotation=90)
             ax.set_yscale("log")
             ax.set_xscale("log")
-            ax.xaxis.set_minor_formatter(NullFormatter())
+            # plain numbers; the minor ticks labelled only when the axis spans less than a decade (or no tick would be)
+            ax.xaxis.set_major_formatter(LogFormatter(labelOnlyBase=False))
+            ax.xaxis.set_minor_formatter(LogFormatter(labelOnlyBase=False, minor_thresholds=(1, 0.4)))
             ax.set_xlabel(f"{what} on {chip}" + (" (measured; hollow: estimated)" if i == 0 else ""))
             ax.set_ylabel(f"pre-rounding max error ({unit})")
             ax.grid(True, which="both", alpha=0.25)
     handles = [axes[0][0].scatter([], [], marker=mk, color=col, label=f) for f, (col, mk) in STYLE.items()
                if any(p["family"] == f for p in points)]
-    fig.legend(handles=handles, loc="outside upper right", ncols=len(handles), fontsize=8)
+    fig.legend(handles=handles, loc="outside lower center", ncols=len(handles), fontsize=8)
     fig.suptitle(title, fontsize=10)
     return _save(fig, path)

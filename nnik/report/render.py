@@ -43,6 +43,8 @@ def render_markdown(sections: list[Section], metrics: dict) -> str:
     out = [f"# nnik report: {metrics['name']}", ""]
     for sec in sections:
         out += [f"## {sec.title}", ""]
+        if sec.figures_first:
+            out += _md_figures(sec)
         for p in sec.paragraphs:
             out += [p, ""]
         for cls, v in sec.verdicts:
@@ -77,9 +79,16 @@ def render_markdown(sections: list[Section], metrics: dict) -> str:
             if t.note:
                 out += ["", f"*{t.note}*"]
             out.append("")
-        for f in sec.figures:
-            out += [f"![{f.alt}]({f.file})", "", f"*{f.caption}*", ""]
+        if not sec.figures_first:
+            out += _md_figures(sec)
     return "\n".join(out).rstrip() + "\n"
+
+
+def _md_figures(sec: Section) -> list[str]:
+    out = []
+    for f in sec.figures:
+        out += [f"![{f.alt}]({f.file})", "", f"*{f.caption}*", ""]
+    return out
 
 
 def _numeric_columns(t: Table) -> list[bool]:
