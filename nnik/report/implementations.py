@@ -93,14 +93,14 @@ def build(ctx) -> Section:
         f"points; the cheapest by measured cycles on {tg['chip']} wins, flash breaks ties. Inputs in units of "
         f"{sel['input_unit_um']:g} µm. Each family's best is in c/alt/<family>/, the pick in c/.")
     srch = ctx.m.get("search")
-    if sel.get("source") == "search" and isinstance(srch, dict):
+    if searched(ctx.m):
         done = sum((srch.get("trials") or {}).get(k, 0) for k in ("complete", "pruned", "fail"))
         sec.paragraphs.append(
             f"Found by `nnik search`: {done} trials of study {srch.get('study')} ({srch.get('storage')} storage); its "
             f"Pareto front of error, estimated cycles and flash has {len(srch.get('front') or [])} points over "
             f"{', '.join(srch.get('front_families') or []) or 'no family'}; the pick comes from the front of the "
             f"{srch.get('feasible_front', 0)} points that meet the target, each family's cheapest verified on the "
-            "simulators.")
+            "simulators. The report's first figure, above, draws that front with these points.")
     t = Table("implementations-table", "Each family's best point (pre-rounding error; cycles: mean per call on the "
               "simulator; flash: the model's own bytes)",
               ["family", "configuration", f"pre max ({unit})", f"RMS ({unit})", "avr cycles", "pic18 cycles",
@@ -122,8 +122,15 @@ def build(ctx) -> Section:
         row.append(txt("PICK" if r.get("picked") else ""))
         t.rows.append(row)
     sec.tables.append(t)
-    ctx.plot(sec, lambda: plot_front(ctx, sel))
+    if not searched(ctx.m):  # with a search, the front's figure above shows these points
+        ctx.plot(sec, lambda: plot_front(ctx, sel))
     return sec
+
+
+def searched(m: dict) -> bool:
+    """The selection came from `nnik search` and metrics.json holds its front (the report then
+    leads with the front's figure)."""
+    return lookup(m, "selection", "source") == "search" and isinstance(lookup(m, "search", "front"), list)
 
 
 def _hollow(sel: dict) -> str:

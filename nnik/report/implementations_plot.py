@@ -11,7 +11,7 @@ from pathlib import Path
 from typing import Mapping, Sequence
 
 import numpy as np
-from matplotlib.ticker import LogFormatter
+from matplotlib.ticker import LogFormatter, NullFormatter
 
 from nnik.report.plots import _figure, _save
 
@@ -44,7 +44,7 @@ def families_front(path: Path, *, points: Sequence[Mapping], chips: Sequence[str
                     ax.annotate("pick", (x, p["err"]), xytext=(8, 8), textcoords="offset points", fontsize=8)
                 elif p.get("label") or (p["family"] == "mlp" and p.get("best") and filled):
                     # to the left: the labelled MLP is usually the costliest point, at the right edge
-                    ax.annotate(p.get("label") or "MLP best", (x, p["err"]), xytext=(-8, -12),
+                    ax.annotate(p.get("label") or "MLP best", (x, p["err"]), xytext=(-8, 6),
                                 textcoords="offset points", fontsize=8, color=col, ha="right").set_in_layout(False)
             ax.axhline(max_error, color="k", ls=":", lw=1)
             ax.text(0.01, max_error, f" max_error {max_error:g}", transform=ax.get_yaxis_transform(), va="bottom",
@@ -55,9 +55,12 @@ def families_front(path: Path, *, points: Sequence[Mapping], chips: Sequence[str
                         fontsize=7, color="#8c564b", rotation=90)
             ax.set_yscale("log")
             ax.set_xscale("log")
-            # plain numbers; the minor ticks labelled only when the axis spans less than a decade (or no tick would be)
+            # plain numbers; the minor ticks labelled only when the axis spans less than a decade (no major tick
+            # may be in view then); wider, they would overlap
+            lo, hi = ax.get_xlim()
             ax.xaxis.set_major_formatter(LogFormatter(labelOnlyBase=False))
-            ax.xaxis.set_minor_formatter(LogFormatter(labelOnlyBase=False, minor_thresholds=(1, 0.4)))
+            ax.xaxis.set_minor_formatter(LogFormatter(labelOnlyBase=False, minor_thresholds=(1, 0.4))
+                                         if hi < 10 * lo else NullFormatter())
             ax.set_xlabel(f"{what} on {chip}" + (" (measured; hollow: estimated)" if i == 0 else ""))
             ax.set_ylabel(f"pre-rounding max error ({unit})")
             ax.grid(True, which="both", alpha=0.25)

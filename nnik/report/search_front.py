@@ -1,5 +1,5 @@
-"""Section: the Pareto front of `nnik search`, the report's first figure (only when metrics.json
-has a "search" section; without one the section is left out).
+"""Section: the Pareto front of `nnik search`, the report's first figure (only when the selection
+in metrics.json came from a search; otherwise the section is left out).
 
 Pre-rounding max error (log) against cycles and against flash, one column of panels per chip:
 every point of the search's front (filled: measured on the simulator; hollow: its estimate),
@@ -18,7 +18,8 @@ from __future__ import annotations
 
 from nnik.c_hash import dir_hash
 from nnik.report.document import D_CYC, D_UNIT, Cell, Fig, Section, Table, keypath, not_run_cell, num, txt
-from nnik.report.implementations import CHIPS, _c_hash, _check_cell, best_point, estimated_costs, float_ik_cycles
+from nnik.report.implementations import (CHIPS, _c_hash, _check_cell, best_point, estimated_costs, float_ik_cycles,
+                                         searched)
 
 PNG = "search_front.png"
 PNGS = (PNG,)
@@ -121,9 +122,9 @@ def _cost_cells(ctx, r: dict, i: int) -> list[Cell]:
 
 
 def build(ctx) -> Section | None:
-    srch, sel = ctx.m.get("search"), ctx.m.get("selection")
-    if not isinstance(srch, dict) or not isinstance(srch.get("front"), list) or not isinstance(sel, dict):
+    if not searched(ctx.m):  # no search, or a ladder's selection since: nothing of the search to show
         return None
+    srch, sel = ctx.m["search"], ctx.m["selection"]
     sec = Section("search-front", "The search's Pareto front", figures_first=True)
     unit = ctx.unit
     ctx.plot(sec, lambda: plot(ctx, srch, sel))
