@@ -2,7 +2,8 @@
 
 For a scenario (galvo_cba2012 by default) a fresh N-trial `nnik search` runs (its study is
 started over), then the ladder of `nnik run` is fitted on the same problem. The table shows the
-search's wall time and trials per minute, the families on its feasible Pareto front, its verified
+search's wall time and trials per minute, the families on its Pareto front, how many of the
+front's points that meet max_error ran on the simulators (and how long that took), its verified
 pick, and the pick against the ladder's: both by estimated cycles on the [target] chip (the
 ladder's cheapest configuration that meets max_error), and the search pick's measured cycles.
 Figures go to build/bench/search_<scenario>.json too.
@@ -82,6 +83,7 @@ def bench(name: str, trials: int, jobs: int) -> dict:
     row = {"scenario": name, "trials": trials, "jobs": jobs, "minutes_total": minutes,
            "search_minutes": s["seconds"] / 60, "trials_per_min": s["trials_per_min"],
            "front_points": len(s["front"]), "front_families": s["front_families"], "error": err,
+           "front_verified": s.get("front_verified"),
            "pick": None if pick is None else {"describe": pick["describe"], "pre_max": pick["pre_max"],
                                               "est_cycles": pick["estimate"][chip]["cycles"],
                                               "cycles": pick["cycles"][chip], "flash_bytes": pick["flash_bytes"][chip]},
@@ -94,6 +96,13 @@ def bench(name: str, trials: int, jobs: int) -> dict:
     return row
 
 
+def _verified_cell(v: dict) -> str:
+    """How many front points that meet max_error ran on the simulators, of how many, in how long."""
+    if "cap" not in v:
+        return "-"
+    return f"{v['verified']} of {v['meeting_max_error']} (cap {v['cap']}) in {v['seconds']:.0f} s"
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(prog="python -m nnik.search_bench")
     ap.add_argument("scenarios", nargs="*", help="shipped scenario names (default: all of them)")
@@ -103,13 +112,14 @@ def main(argv=None) -> int:
     rows = [bench(n, a.trials, a.jobs) for n in a.scenarios or shipped()]
     t = Table(title=f"nnik search: {a.trials} trials, {a.jobs} job(s) (goals: <= {GOAL_MINUTES:g} min, pick <= ladder, "
                     f">= {GOAL_FAMILIES} families on the front of {GOAL_FAMILIES_ON})")
-    for c in ("scenario", "minutes", "trials/min", "front families", "search pick (est / measured cycles)",
-              "ladder pick (est cycles)", "goals met"):
+    for c in ("scenario", "minutes", "trials/min", "front families", "front verified",
+              "search pick (est / measured cycles)", "ladder pick (est cycles)", "goals met"):
         t.add_column(c)
     for r in rows:
         p, lp = r["pick"], r["ladder_pick"]
         t.add_row(r["scenario"], f"{r['minutes_total']:.1f}", f"{r['trials_per_min'] or 0:.1f}",
                   f"{len(r['front_families'])}: {', '.join(r['front_families'])} ({r['front_points']} points)",
+                  _verified_cell(r.get("front_verified") or {}),
                   "-" if p is None else f"{p['describe'][:50]}: {p['est_cycles']:.0f} / {p['cycles']:.0f}",
                   "-" if lp is None else f"{lp['describe'][:50]}: {lp['est_cycles']:.0f}",
                   ", ".join(f"{k} {'yes' if v else 'NO'}" for k, v in r["goals"].items()))
