@@ -180,3 +180,26 @@ def test_run_with_search_picks_from_the_search(tmp_path, capsys):
     html = (out / "report" / "index.html").read_text()
     assert parse(out / "report" / "index.html")[0].imgs[0] == "search_front.png"
     assert "the dashed line is the float math.h IK" in html
+
+
+def test_pick_sentence_gives_the_ratio_to_another_family(searched, tmp_path):
+    """The sentence under the figure: the pick against the cheapest measured point of another family
+    that meets the target, as a cycles ratio on the chip (here a measured lut point called poly)."""
+    src, m = searched
+    out = tmp_path / "copy"
+    shutil.copytree(src, out, ignore=shutil.ignore_patterns("report", "avr", "pic18", "rerun"))
+    metrics = copy.deepcopy(m)
+    chip = metrics["selection"]["target"]["chip"]
+    other = next(r for r in metrics["search"]["front"] if r.get("measured") and not r["picked"])
+    other["family"] = "poly"
+    pick = next(r for r in metrics["selection"]["implementations"] if r["picked"])
+    (out / "metrics.json").write_text(json.dumps(metrics))
+    html = write_report(out).read_text()
+    ratio = other["measured"][chip]["cycles"] / pick["cycles"][chip]
+    assert ratio > 1
+    assert (f"The best point of another family that meets the target, {other['describe']}" in html
+            and f"the pick is {ratio:.2f}x faster on {chip}" in html), ratio
+    # with the other point's C changed since, it is no longer a measured point to compare with
+    c = out / other["c_dir"] / f"{NAME}.c"
+    c.write_text(c.read_text() + "\n/* edited */\n")
+    assert f"the pick is {ratio:.2f}x faster" not in write_report(out).read_text()
