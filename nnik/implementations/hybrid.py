@@ -29,28 +29,11 @@ import numpy as np
 from nnik.errors import NnikError
 from nnik.implementations.c_common import i32
 from nnik.implementations.lut import LutImpl, cell_exponents, cell_ladder, fit_points, fold_targets
-from nnik.implementations.lut_table import Grid, Table, dependence, fit_nodes, fold_plan, quantise
+from nnik.implementations.lut_table import Grid, Table, base_terms, dependence, fit_nodes, fold_plan, quantise
 from nnik.implementations.problem import Problem
 
 DEFAULTS = {"bits": 16, "W": 16, "fit": "lsq", "base": "affine", "coef_bits": 16, "symmetry": True,
             "separable": True}
-
-
-def base_terms(odd: np.ndarray, dep) -> np.ndarray:
-    """(2, 3) bool: which of [C, Ax, Ay] output o's base may use. Odd in folded x: the sum must
-    vanish at tx = 0, so no C and no Ay; likewise for y. A 1-D output (dep "y" / "x") has no
-    slope along the other axis, so its residual stays 1-D."""
-    use = np.ones((2, 3), dtype=bool)
-    for o in range(2):
-        if odd[o, 0]:
-            use[o, [0, 2]] = False
-        if odd[o, 1]:
-            use[o, [0, 1]] = False
-        if dep[o] == "y":
-            use[o, 1] = False
-        elif dep[o] == "x":
-            use[o, 2] = False
-    return use
 
 
 def affine_lsq(t: np.ndarray, q: np.ndarray, use: np.ndarray) -> np.ndarray:

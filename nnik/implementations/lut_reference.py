@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
-from nnik.implementations.lut_table import Grid, Table, dependence, fold_plan
+from nnik.implementations.lut_table import Grid, Table, base_terms, dependence, fold_plan
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -71,7 +71,6 @@ def reference_impl(cls, scenario: str, cfg: dict):
     full = {**cfg, "fit": "lsq"}
     if family == "lut":
         return cls(p, full, tab)
-    from nnik.implementations.hybrid import base_terms
 
     tab.offset = (0, 0)
     wide = 10 if cfg["W"] == 16 else 1  # 16-bit and 8-bit base slopes

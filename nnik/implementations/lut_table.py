@@ -106,6 +106,23 @@ def detect_dependence(problem, n: int = 4000, seed: int = 8) -> list[str]:
     return dep
 
 
+def base_terms(odd: np.ndarray, dep) -> np.ndarray:
+    """(2, 3) bool: which terms [C, Ax, Ay] of the hybrid's affine base output o may use. Odd in folded x: the sum must
+    vanish at tx = 0, so no C and no Ay; likewise for y. A 1-D output (dep "y" / "x") has no
+    slope along the other axis, so its residual stays 1-D."""
+    use = np.ones((2, 3), dtype=bool)
+    for o in range(2):
+        if odd[o, 0]:
+            use[o, [0, 2]] = False
+        if odd[o, 1]:
+            use[o, [0, 1]] = False
+        if dep[o] == "y":
+            use[o, 1] = False
+        elif dep[o] == "x":
+            use[o, 2] = False
+    return use
+
+
 def merge_matrix(grid, dep: str):
     """(nx*ny, n1) 0/1 matrix: node (iy, ix) -> its 1-D node (iy for "y", ix for "x")."""
     import scipy.sparse as sp
