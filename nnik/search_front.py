@@ -20,7 +20,7 @@ from pathlib import Path
 from nnik.implementations.base import TARGETS
 from nnik.implementations.verify import verify_host, verify_on_target
 
-MAX_VERIFY = 16  # front points that meet max_error verified on the simulators, cheapest first
+MAX_VERIFY = 48  # front points that meet max_error verified on the simulators, cheapest first
 FRONT_DIR = Path("targets") / "front"
 
 
