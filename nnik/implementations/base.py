@@ -49,6 +49,10 @@ class Implementation(ABC):
     # chips on which the portable C path (-DNNIK_PORTABLE) is verified too, besides the host
     portable_checked_on: ClassVar[tuple[str, ...]] = TARGETS
     portable_not_checked_reason: ClassVar[str] = ""
+    # chips where the search verifies this family's front points besides its best (the best is
+    # verified on every chip)
+    front_checked_on: ClassVar[tuple[str, ...]] = TARGETS
+    front_not_checked_reason: ClassVar[str] = ""
 
     def __init__(self, problem: Problem, config: dict):
         self.problem = problem

@@ -61,6 +61,9 @@ class MlpImpl(Implementation):
     portable_checked_on = ("avr",)
     portable_not_checked_reason = ("SDCC takes minutes to compile the fast kernel's unrolled portable path; the "
                                    "portable kernel itself is verified on PIC18 by `nnik verify --target pic18`")
+    front_checked_on = ("avr",)
+    front_not_checked_reason = ("SDCC takes minutes to compile each MLP for pic18: of the MLP's front points only its "
+                                "best is compiled there (this one shows its estimate)")
 
     def __init__(self, problem: Problem, config: dict, model, im):
         super().__init__(problem, config)
