@@ -203,3 +203,26 @@ def test_pick_sentence_gives_the_ratio_to_another_family(searched, tmp_path):
     c = out / other["c_dir"] / f"{NAME}.c"
     c.write_text(c.read_text() + "\n/* edited */\n")
     assert f"the pick is {ratio:.2f}x faster" not in write_report(out).read_text()
+
+
+def test_an_mlp_front_point_runs_on_avr_and_not_through_sdcc(galvo_run, tmp_path):
+    """An MLP front point other than the MLP's best runs on the host and simavr; on pic18 it keeps
+    its estimate and says why (SDCC takes minutes per MLP), and it still counts as verified."""
+    require_tool("simavr")
+    from nnik import selection as sel
+    from nnik.search import _candidate
+    from nnik.search_space import fast_problem
+
+    out = _copy_run(galvo_run, tmp_path / "m")
+    problem = fast_problem(pipeline.problem_for(out))
+    cfg = {"hidden": [3], "mode": "residual", "kernel": "fast", "tanh": "default", "weight_bits": 16}
+    c = _candidate(problem, "mlp", cfg)
+    assert c.impl is not None, c.skipped
+    row = {"trial": 7, "family": "mlp", "config": cfg, "pre_max": c.acc["pre_max"]}
+    target = {"chip": "avr", "max_error": 2 * c.acc["pre_max"]}
+    info = search_front.verify_front(out, [row], {search_front.config_key("mlp", cfg): c}, {}, target,
+                                     out / "c" / sel.ALT_DIR)
+    assert info["verified"] == info["run_here"] == 1
+    assert set(row["measured"]) == {"avr"} and row["measured"]["avr"]["cycles"] > 100
+    assert row["checks"]["pic18"] == {"not_run": FAMILIES["mlp"].front_not_checked_reason}
+    assert row["bit_exact"] is True and row["checks"]["host"]["mismatches"] == 0
