@@ -25,6 +25,25 @@ def problem_from(path: Path) -> Problem:
     return Problem(scn, build_dataset(scn), unit_um=scn.export["input_unit_um"])
 
 
+def centred_corexy(tmp_path: Path) -> Problem:
+    """corexy_nonlinear on a workspace centred on 0: the domain is symmetric, the IK is not."""
+    text = (DATASETS / "corexy_nonlinear.toml").read_text()
+    text = text.replace("x_mm = [0.0, 200.0]", "x_mm = [-100.0, 100.0]").replace(
+        "y_mm = [0.0, 200.0]", "y_mm = [-100.0, 100.0]")
+    path = tmp_path / "centred.toml"
+    path.write_text(text)
+    p = problem_from(path)
+    assert np.array_equal(p.lo, -p.hi)
+    return p
+
+
+def host_check(im, tmp_path: Path) -> dict:
+    """verify_host of `im` on host_vectors(its problem): its C against its integer model."""
+    from nnik.implementations.verify import verify_host
+
+    return verify_host(im, tmp_path / "c", host_vectors(im.problem))
+
+
 def host_vectors(p: Problem, n: int = 100_000, seed: int = 3) -> np.ndarray:
     """10^5 random in-domain points plus the domain's corners and points outside it."""
     from nnik.implementations.verify import host_vectors as hv

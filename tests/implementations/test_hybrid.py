@@ -5,14 +5,14 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from lut_helpers import host_vectors, problem
+from lut_helpers import host_check, problem
 
 from nnik.errors import NnikError
 from nnik.implementations import FAMILIES
 from nnik.implementations.accuracy import accuracy
 from nnik.implementations.hybrid import HybridImpl
 from nnik.implementations.lut import LutImpl
-from nnik.implementations.verify import verify_host, verify_on_target
+from nnik.implementations.verify import verify_on_target
 
 from conftest import require_tool
 
@@ -60,9 +60,7 @@ def test_measured_rows():
     ("galvo_cba2012", {"k": [13, 13], "bits": 32, "W": 16}),
 ])
 def test_integer_model_equals_host_c(tmp_path, scenario, cfg):
-    p = problem(scenario)
-    im = HybridImpl.fit(p, cfg)
-    r = verify_host(im, tmp_path / "c", host_vectors(p))
+    r = host_check(HybridImpl.fit(problem(scenario), cfg), tmp_path)
     assert r["points"] > 100_000
     assert r["mismatches"] == 0
 

@@ -7,7 +7,7 @@ import re
 
 import numpy as np
 import pytest
-from lut_helpers import c_function_body, host_vectors, problem, problem_from
+from lut_helpers import c_function_body, centred_corexy, host_check, host_vectors, problem, problem_from
 
 from nnik.errors import NnikError
 from nnik.implementations import FAMILIES
@@ -33,11 +33,7 @@ def test_symmetry_detected_on_the_galvo():
 
 def test_no_symmetry_on_a_symmetric_domain_without_it(tmp_path):
     # a nonlinear CoreXY on a workspace centred on 0: the domain is symmetric, the IK is not
-    text = (DATASETS / "corexy_nonlinear.toml").read_text()
-    text = text.replace("x_mm = [0.0, 200.0]", "x_mm = [-100.0, 100.0]").replace(
-        "y_mm = [0.0, 200.0]", "y_mm = [-100.0, 100.0]")
-    p = problem_from(write_toml(tmp_path, text))
-    assert np.array_equal(p.lo, -p.hi)
+    p = centred_corexy(tmp_path)
     assert detect_parity(p) == [[None, None], [None, None]]
     im = LutImpl.fit(p, {"k": [15, 15]})
     assert im.table.grid.fold == (False, False)
@@ -67,7 +63,7 @@ def test_one_dimensional_tables_along_x_and_y_equal_host_c(tmp_path):
     t.ent[0] = np.repeat(t.ent[0][:1, :], t.ent.shape[1], axis=0)
     t.ent[1] = np.repeat(t.ent[1][:, :1], t.ent.shape[2], axis=1)
     t.dep = ("x", "y")
-    r = verify_host(im, tmp_path / "c", host_vectors(im.problem))
+    r = host_check(im, tmp_path)
     assert r["mismatches"] == 0
 
 
@@ -136,9 +132,7 @@ def test_index_is_a_shift():
     ("corexy_measured", {"k": [15, 15], "bits": 32}),               # measured rows
 ])
 def test_integer_model_equals_host_c(tmp_path, scenario, cfg):
-    p = problem(scenario)
-    im = LutImpl.fit(p, cfg)
-    r = verify_host(im, tmp_path / "c", host_vectors(p))
+    r = host_check(LutImpl.fit(problem(scenario), cfg), tmp_path)
     assert r["points"] > 100_000
     assert r["mismatches"] == 0
 

@@ -8,7 +8,7 @@ import json
 
 import numpy as np
 import pytest
-from lut_helpers import host_vectors, problem, problem_from
+from lut_helpers import centred_corexy, host_vectors, problem, problem_from
 
 from nnik.errors import NnikError
 from nnik.implementations import FAMILIES
@@ -48,11 +48,7 @@ def test_no_parity_about_a_point_that_is_not_the_domain_centre(tmp_path):
 
 
 def test_no_symmetry_in_an_asymmetric_ik_on_a_symmetric_domain(tmp_path):
-    text = (DATASETS / "corexy_nonlinear.toml").read_text()
-    text = text.replace("x_mm = [0.0, 200.0]", "x_mm = [-100.0, 100.0]").replace(
-        "y_mm = [0.0, 200.0]", "y_mm = [-100.0, 100.0]")
-    p = problem_from(write_toml(tmp_path, text))
-    assert np.array_equal(p.lo, -p.hi)
+    p = centred_corexy(tmp_path)
     assert [s.label() for s in detect_symmetry(p)] == ["no symmetry", "no symmetry"]
 
 
