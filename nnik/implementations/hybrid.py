@@ -28,8 +28,8 @@ import numpy as np
 
 from nnik.errors import NnikError
 from nnik.implementations.c_common import i32
-from nnik.implementations.lut import LutImpl, cell_exponents, cell_ladder, fit_points, fold_targets
-from nnik.implementations.lut_table import Grid, Table, base_terms, dependence, fit_nodes, fold_plan, quantise
+from nnik.implementations.lut import LutImpl, cell_exponents, cell_ladder, folded_data, table_for
+from nnik.implementations.lut_table import Table, base_terms
 from nnik.implementations.problem import Problem
 
 DEFAULTS = {"bits": 16, "W": 16, "fit": "lsq", "base": "affine", "coef_bits": 16, "symmetry": True,
@@ -82,15 +82,12 @@ class HybridImpl(LutImpl):
             raise NnikError(f"hybrid coef_bits {cfg['coef_bits']!r}: must be 8 or 16")
         a_max = (1 << cfg["coef_bits"]) - 1  # |A|: 8 bits halves the base's multiplies
         cfg["k"] = cell_exponents(cfg)
-        fold, odd = fold_plan(problem, bool(cfg["symmetry"]))
-        dep = dependence(problem, bool(cfg["separable"]))
-        grid = Grid.make(problem.lo, problem.hi, cfg["k"], fold, int(cfg["W"]))
-        pts, q = fit_points(problem, grid)
-        t, qf = fold_targets(grid, odd, np.asarray(pts, dtype=np.float64), q)
-        span = np.array(grid.span, dtype=np.float64)
-        use = base_terms(odd, dep)
+        d = folded_data(problem, cfg)
+        t, qf = d.t, d.q  # folded: an output that is not odd keeps its values, so its range too
+        span = np.array(d.grid.span, dtype=np.float64)
+        use = base_terms(d.odd, d.dep)
         coef = affine_lsq(t, qf, use)
-        offset = np.array([0 if odd[o].any() else int(np.rint((q[:, o].max() + q[:, o].min()) / 2))
+        offset = np.array([0 if d.odd[o].any() else int(np.rint((qf[:, o].max() + qf[:, o].min()) / 2))
                            for o in range(2)], dtype=np.int64)
         base, G = [], []
         for o in range(2):
@@ -113,9 +110,7 @@ class HybridImpl(LutImpl):
         base = np.array(base, dtype=np.int64)
         G = np.array(G)
         bval = (base[:, 0][None, :] + t[:, :1] * base[:, 1][None, :] + t[:, 1:] * base[:, 2][None, :]) / 2.0**G
-        resid = qf - offset - bval
-        vals, _ = fit_nodes(grid, t, resid, odd, cfg["fit"], measured=not problem.analytic, dep=dep)
-        tab = quantise(grid, vals, int(cfg["bits"]), odd, cfg.get("fb"), dep=dep)
+        tab = table_for(problem, cfg, d, qf - offset - bval)
         for o in range(2):  # the table's offset (0 for an odd output) moves into the base constant
             base[o, 0] += int(tab.offset[o]) << int(G[o])
         tab.offset = (0, 0)

@@ -16,6 +16,7 @@ Knobs (``config``):
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -59,17 +60,38 @@ def fold_targets(grid: Grid, odd: np.ndarray, pts: np.ndarray, q: np.ndarray):
     return t, qf
 
 
-def build_table(problem: Problem, cfg: dict, targets=None, symmetry: bool | None = None) -> Table:
-    """Grid, fit and range analysis for a config; `targets` (pts, q) overrides the data (the
-    hybrid's residual)."""
-    sym = cfg.get("symmetry", True) if symmetry is None else symmetry
-    fold, odd = fold_plan(problem, sym)
+@dataclass
+class FoldedData:
+    """A config's grid and its fit data on the stored part of the table: folded coordinates t,
+    folded targets q (odd outputs sign-flipped), the odd mask and the per-output dependence."""
+
+    grid: Grid
+    odd: np.ndarray
+    dep: tuple[str, str]
+    t: np.ndarray
+    q: np.ndarray
+
+
+def folded_data(problem: Problem, cfg: dict) -> FoldedData:
+    """Grid (with the folds the symmetry check allows) and the folded fit points of a config."""
+    fold, odd = fold_plan(problem, bool(cfg.get("symmetry", True)))
     grid = Grid.make(problem.lo, problem.hi, cfg["k"], fold, int(cfg.get("W", 16)))
-    pts, q = fit_points(problem, grid) if targets is None else targets
+    pts, q = fit_points(problem, grid)
     t, qf = fold_targets(grid, odd, np.asarray(pts, dtype=np.float64), q)
-    dep = dependence(problem, bool(cfg.get("separable", True)))
-    vals, _ = fit_nodes(grid, t, qf, odd, cfg.get("fit", "lsq"), measured=not problem.analytic, dep=dep)
-    return quantise(grid, vals, int(cfg.get("bits", 16)), odd, cfg.get("fb"), dep=dep)
+    return FoldedData(grid, odd, dependence(problem, bool(cfg.get("separable", True))), t, qf)
+
+
+def table_for(problem: Problem, cfg: dict, d: FoldedData, values: np.ndarray) -> Table:
+    """Node fit and range analysis of `values` (N, 2) at d.t: the IK itself (lut) or the
+    residual over a base (hybrid)."""
+    vals, _ = fit_nodes(d.grid, d.t, values, d.odd, cfg.get("fit", "lsq"), measured=not problem.analytic, dep=d.dep)
+    return quantise(d.grid, vals, int(cfg.get("bits", 16)), d.odd, cfg.get("fb"), dep=d.dep)
+
+
+def build_table(problem: Problem, cfg: dict) -> Table:
+    """Grid, fit and range analysis for a config."""
+    d = folded_data(problem, cfg)
+    return table_for(problem, cfg, d, d.q)
 
 
 def k_for_nodes(span: int, nodes: int) -> int:

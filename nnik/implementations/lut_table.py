@@ -107,9 +107,9 @@ def detect_dependence(problem, n: int = 4000, seed: int = 8) -> list[str]:
 
 
 def base_terms(odd: np.ndarray, dep) -> np.ndarray:
-    """(2, 3) bool: which terms [C, Ax, Ay] of the hybrid's affine base output o may use. Odd in folded x: the sum must
-    vanish at tx = 0, so no C and no Ay; likewise for y. A 1-D output (dep "y" / "x") has no
-    slope along the other axis, so its residual stays 1-D."""
+    """(2, 3) bool: which terms [C, Ax, Ay] of the hybrid's affine base output o may use. Odd in
+    folded x: the sum must vanish at tx = 0, so no C and no Ay; likewise for y. A 1-D output
+    (dep "y" / "x") has no slope along the other axis, so its residual stays 1-D."""
     use = np.ones((2, 3), dtype=bool)
     for o in range(2):
         if odd[o, 0]:
