@@ -273,11 +273,12 @@ def _dominates(a, b) -> bool:
     return all(x <= y for x, y in zip(a, b)) and any(x < y for x, y in zip(a, b))
 
 
-def front_rows(study, target: dict) -> list[dict]:
+def front_rows(front: list, target: dict) -> list[dict]:
+    """The rows of metrics["search"]["front"] for the trials of a front (:func:`front_trials`)."""
     return [{"trial": t.number, "family": t.user_attrs["family"], "config": t.user_attrs["config"],
              "describe": t.user_attrs.get("describe"), "pre_max": t.values[0], "cycles": t.values[1],
              "flash_bytes": int(t.values[2]), "meets_target": feasible(t.user_attrs, target)}
-            for t in front_trials(study, target)]
+            for t in front]
 
 
 def show(outdir: Path, url: str | None = None, name: str | None = None) -> dict:
@@ -292,7 +293,7 @@ def show(outdir: Path, url: str | None = None, name: str | None = None) -> dict:
     study = open_study(open_storage(url, outdir), name, scn.fingerprint, scn.name, list(DIRECTIONS), create=False)
     states = {s.name.lower(): len(study.get_trials(deepcopy=False, states=(s,))) for s in TrialState}
     return {"study": name, "storage": storage_kind(url), "trials": states, "target": scn.target,
-            "front": front_rows(study, scn.target)}
+            "front": front_rows(front_trials(study, scn.target), scn.target)}
 
 
 def _candidate(problem, fam: str, cfg: dict) -> sel.Candidate:
@@ -333,7 +334,7 @@ def finish(outdir: Path, study, url: str | None, info: dict, progress: bool = Tr
         for c in tqdm([c for c in bests.values() if c.meets(target["max_error"])], desc="verify family bests",
                       unit="family", disable=not progress, leave=False):
             sel.verify_candidate(c, c_dir / sel.ALT_DIR / c.family, (outdir / "targets" / "families").resolve())
-    rows = front_rows(study, target)
+    rows = front_rows(front, target)
     by_key = {config_key(c.family, c.config): c for c in cands}
     verify_info = verify_front(outdir, rows, by_key, bests, target, c_dir / sel.ALT_DIR, progress)
     for c in bests.values():
