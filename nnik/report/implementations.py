@@ -43,19 +43,41 @@ def pick_sentence(sel: dict, unit: str) -> str:
     pick = next((r for r in rows if r.get("picked")), None)
     if pick is None:
         return f"No family met max_error {tg['max_error']:g} {unit} within the limits on {chip}."
-    cyc = pick["cycles"][chip]
-    s = (f"nnik picks {pick['describe']}: {pick['pre_max']:.4f} {unit} before rounding, {cyc:.0f} cycles and "
-         f"{pick['flash_bytes'][chip]} B of flash on {chip}.")
-    others = [r for r in rows if not r.get("picked") and r["pre_max"] <= tg["max_error"]
-              and lookup(r, "cycles", chip) is not None]
-    if others:
-        nxt = min(others, key=lambda r: r["cycles"][chip])
-        s += (f" The best point of another family that meets the target, {nxt['describe']}, takes "
-              f"{nxt['cycles'][chip]:.0f} cycles: the pick is {nxt['cycles'][chip] / cyc:.2f}x faster.")
+    s = (f"nnik picks {pick['describe']}: {pick['pre_max']:.4f} {unit} before rounding, {pick['cycles'][chip]:.0f} "
+         f"cycles and {pick['flash_bytes'][chip]} B of flash on {chip}.")
+    s += versus_other_family([comparable(r, chip) for r in rows if lookup(r, "cycles", chip) is not None], pick, tg,
+                             unit)
     missing = [r for r in rows if r["pre_max"] > tg["max_error"]]
     if missing:
         s += " Missing the target: " + "; ".join(f"{r['family']} (best {r['pre_max']:.4f} {unit})" for r in missing) + "."
     return s
+
+
+def comparable(r: dict, chip: str) -> dict:
+    """A measured selection row as {family, describe, pre_max, cycles, flash} on the chip."""
+    return {"family": r["family"], "describe": r.get("describe"), "pre_max": r["pre_max"],
+            "cycles": r["cycles"][chip], "flash": r["flash_bytes"][chip]}
+
+
+def versus_other_family(rows: list[dict], pick: dict, tg: dict, unit: str) -> str:
+    """How the pick (a selection row, measured) compares with the cheapest measured point of another
+    family that meets [target] (max_error, and the cycle and flash limits on the chip if set),
+    among rows {family, describe, pre_max, cycles, flash} measured in the same harness."""
+    chip = tg["chip"]
+    pool = [r for r in rows if r["family"] != pick["family"] and r["pre_max"] <= tg["max_error"]
+            and r["cycles"] <= (tg.get("max_cycles") or float("inf"))
+            and r["flash"] <= (tg.get("max_flash_bytes") or float("inf"))]
+    if not pool:
+        return f" No point of another family that meets the target was measured on {chip}: nothing to compare."
+    other = min(pool, key=lambda r: (r["cycles"], r["flash"]))
+    cyc, fl = pick["cycles"][chip], pick["flash_bytes"][chip]
+    oc, of = other["cycles"], other["flash"]
+    speed = (f"the pick is {oc / cyc:.2f}x faster on {chip}" if oc >= cyc else
+             f"measured, that point is {cyc / oc:.2f}x faster than the pick on {chip} (the pick is the cheapest of "
+             "each family's best by estimate)")
+    size = f"and needs {of / fl:.2f}x less flash" if of >= fl else f"but needs {fl / of:.2f}x its flash"
+    return (f" The best point of another family that meets the target, {other['describe']} ({other['pre_max']:.4f} "
+            f"{unit}), takes {oc:.0f} cycles and {of} B in the same harness: {speed}, {size}.")
 
 
 def mlp_sentence(sel: dict, unit: str) -> str | None:

@@ -19,7 +19,7 @@ from __future__ import annotations
 from nnik.c_hash import dir_hash
 from nnik.report.document import D_CYC, D_UNIT, Cell, Fig, Section, Table, keypath, not_run_cell, num, txt
 from nnik.report.implementations import (CHIPS, _c_hash, _check_cell, best_point, estimated_costs, float_ik_cycles,
-                                         searched)
+                                         comparable, searched, versus_other_family)
 
 PNG = "search_front.png"
 PNGS = (PNG,)
@@ -53,15 +53,6 @@ def points(ctx, srch: dict, sel: dict) -> list[dict]:
     return pts
 
 
-def _other_family(rows: list[dict], pick: dict, tg: dict) -> dict | None:
-    """The cheapest measured point of another family that meets [target] (max_error, and the cycle
-    and flash limits on the chip if set), among rows {describe, family, pre_max, cycles, flash}."""
-    pool = [r for r in rows if r["family"] != pick["family"] and r["pre_max"] <= tg["max_error"]
-            and r["cycles"] <= (tg.get("max_cycles") or float("inf"))
-            and r["flash"] <= (tg.get("max_flash_bytes") or float("inf"))]
-    return min(pool, key=lambda r: (r["cycles"], r["flash"])) if pool else None
-
-
 def pick_sentence(ctx, srch: dict, sel: dict) -> str:
     tg, unit = sel["target"], ctx.unit
     chip = tg["chip"]
@@ -76,19 +67,9 @@ def pick_sentence(ctx, srch: dict, sel: dict) -> str:
     rows = [{"family": r["family"], "describe": r.get("describe"), "pre_max": r["pre_max"],
              "cycles": r["measured"][chip]["cycles"], "flash": r["measured"][chip]["flash_bytes"]}
             for r in srch["front"] if current(ctx, r) and chip in r["measured"]]
-    rows += [{"family": r["family"], "describe": r.get("describe"), "pre_max": r["pre_max"],
-              "cycles": r["cycles"][chip], "flash": r["flash_bytes"][chip]} for r in sel["implementations"]
+    rows += [comparable(r, chip) for r in sel["implementations"]
              if (r.get("cycles") or {}).get(chip) and _c_hash(ctx, r["family"]) == r.get("c_hash")]
-    other = _other_family(rows, pick, tg)
-    if other is None:
-        return s + f" No point of another family that meets the target was measured on {chip}: nothing to compare."
-    oc, of = other["cycles"], other["flash"]
-    speed = (f"the pick is {oc / cyc:.2f}x faster on {chip}" if oc >= cyc else
-             f"measured, that point is {cyc / oc:.2f}x faster than the pick on {chip} (the pick is the cheapest of "
-             "each family's best by estimate)")
-    size = f"and needs {of / fl:.2f}x less flash" if of >= fl else f"but needs {fl / of:.2f}x its flash"
-    return s + (f" The best point of another family that meets the target, {other['describe']} ({other['pre_max']:.4f} "
-                f"{unit}), takes {oc:.0f} cycles and {of} B in the same harness: {speed}, {size}.")
+    return s + versus_other_family(rows, pick, tg, unit)
 
 
 def front_sentence(srch: dict, sel: dict, unit: str) -> str:
