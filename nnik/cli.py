@@ -98,10 +98,16 @@ def print_selection(m: dict) -> None:
                   *[f"{cyc[k]:.0f}" if cyc.get(k) is not None else "-" for k in ("avr", "pic18")],
                   *[f"{fl[k]}" if fl.get(k) is not None else "-" for k in ("avr", "pic18")],
                   ok, "PICK" if r["picked"] else "")
-    console.print(t)
     pick = sel.get("pick")
     if pick:
-        console.print(f"pick: {pick['describe']} -> c/{pick['file']} (every family's best in c/alt/<family>/)")
+        row = next((r for r in sel["implementations"] if r.get("picked")), {})
+        chip = tg.get("chip", "avr")
+        cyc = (row.get("cycles") or {}).get(chip)
+        fl = (row.get("flash_bytes") or {}).get(chip)
+        figures = f": {cyc:.0f} cycles, {fl} B flash on {chip}" if cyc is not None and fl is not None else ""
+        console.print(f"[bold]pick:[/bold] {pick['describe']} -> c/{pick['file']}{figures}, max {row.get('pre_max', 0):.4f} "
+                      f"{unit} pre-rounding (every family's best in c/alt/<family>/)")
+    console.print(t)
 
 
 def _outdir(args, scn, create: bool = False) -> Path:
@@ -129,19 +135,20 @@ def cmd_run(args) -> None:
     console.print(f"generated {', '.join(f'{len(v)} {k}' for k, v in ds.p.items())} points ({ds.meta['sampling']})")
     _warn_training(pipeline.train(scn, out, normalize=False if args.no_normalize else None))
     m = pipeline.evaluate(out)
-    if not args.no_normalize:
-        console.print(f"exporting C to {out / pipeline.C_DIR}/ and verifying it on the host ...")
+    if args.no_normalize:
+        print_accuracy(m)
+    else:
+        console.print(f"mlp family: exporting its C to {out / pipeline.MLP_DIR}/ and verifying it on host, avr and "
+                      "pic18 ...")
         pipeline.verify(out, "host")
         for target in ("avr", "pic18"):
             res = pipeline.verify(out, target)
             if "not_run" in res:
-                console.print(f"{target}: not run ({res['not_run']})")
+                console.print(f"mlp family on {target}: not run ({res['not_run']})")
             else:
-                console.print(f"{target}: {res['cycles']:.0f} cycles/IK ({res['us']:.0f} us at 16 MHz), "
-                              f"{res['flash_bytes']} B flash, {res['mismatches']} mismatches on {res['points']} vectors")
-        m = pipeline.load_metrics(out)
-    print_accuracy(m)
-    if not args.no_normalize:
+                console.print(f"mlp family on {target}: {res['cycles']:.0f} cycles/IK, {res['flash_bytes']} B flash, "
+                              f"{res['mismatches']} mismatches on {res['points']} vectors")
+        console.print(f"mlp family: its accuracy table is `nnik evaluate {out}`")
         if getattr(args, "search", None):
             console.print(f"searching the design space ({args.search} trials), verifying the front on host, avr "
                           "and pic18 ...")

@@ -26,4 +26,16 @@ def test_run_end_to_end(tmp_path, capsys):
     for target in ("avr", "pic18"):
         t = m["targets"][target]
         assert "not_run" in t or t["mismatches"] == 0
-    assert "MLP fixed point, delivered" in printed and "report:" in printed
+    # the pick leads: its line comes before the families table and the summary, and the summary's
+    # per-chip rows are the pick's figures, not the MLP's
+    pick = next(r for r in m["selection"]["implementations"] if r["picked"])
+    assert printed.index("pick:") < printed.index("every family's best") < printed.index("report:")
+    from nnik.report import summary_rows
+
+    rows = summary_rows(m)
+    assert rows[0][0] == "pick (c/NAME.c)" and rows[0][1].startswith(pick["family"])
+    chips = {r[0]: r for r in rows}
+    for target in ("avr", "pic18"):
+        assert chips[target][1].startswith(f"{pick['cycles'][target]:.0f} cycles")
+        assert f"flash {pick['flash_bytes'][target]} B" in chips[target][2]
+        assert chips[f"mlp on {target}"][1].startswith(f"{m['targets'][target]['cycles']:.0f} cycles")

@@ -18,7 +18,7 @@ def test_emptied_header_is_no_longer_bit_exact(tiny_run, tmp_path):
     m = load_metrics(run)
     assert m["host"] == {"not_run": STALE}
     rows = {r[0]: r for r in summary_rows(m)}
-    assert rows["C on host"][1] == "not run"
+    assert rows["mlp C on host"][1] == "not run"
 
 
 def test_changed_c_hides_target_results(tiny_run, tmp_path):
