@@ -11,6 +11,38 @@ import tempfile
 from pathlib import Path
 
 
+def write_file_atomic(path: Path, data: str | bytes) -> None:
+    """Replace one file in a single step: a temporary file beside it, flushed to disk, then
+    ``os.replace`` (and the directory flushed), so a crash leaves the old file or the new one,
+    never half of either."""
+    path = Path(path)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    try:
+        with os.fdopen(fd, "wb") as f:
+            f.write(data.encode() if isinstance(data, str) else data)
+            f.flush()
+            os.fsync(f.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    fsync_dir(path.parent)
+
+
+def fsync_dir(d: Path) -> None:
+    """Flush a directory entry change (a rename or an unlink) to disk."""
+    try:
+        fd = os.open(d, os.O_RDONLY)
+    except OSError:
+        return
+    try:
+        os.fsync(fd)
+    except OSError:
+        pass
+    finally:
+        os.close(fd)
+
+
 class Staged:
     def __init__(self, root: Path):
         self.root = Path(root)

@@ -275,6 +275,12 @@ def _evaluated_dir(model_dir) -> Path:
 
 def cmd_export(args) -> None:
     out = _evaluated_dir(args.model_dir)
+    if getattr(args, "arduino", None):
+        from nnik.pick_state import require_deliverable
+
+        # the library is firmware: only a finished pick whose c/NAME.c is the verified C (refused
+        # before anything is written; the MLP is never delivered in its place)
+        require_deliverable(out, "export --arduino")
     im, _ = pipeline.export(out)
     console.print(f"wrote {out / pipeline.C_DIR}/{im.name}.h and {im.name}.c ({im.weights_bytes()} bytes of tables)")
     if getattr(args, "arduino", None):
@@ -299,14 +305,45 @@ def cmd_select(args) -> None:
 
 
 def cmd_verify(args) -> None:
+    """The pick (c/NAME.c as it is on disk) by default, a family's best (c/alt/F/) with --family,
+    the MLP pipeline's kernels and the baselines (c/mlp/, what `nnik export` wrote) with
+    --mlp-pipeline; always on the host, and on --target's simulator."""
     out = _evaluated_dir(args.model_dir)
-    res = pipeline.verify(out, args.target)
-    print_accuracy(pipeline.load_metrics(out))
-    if not res.get("bit_exact", False):
-        raise NnikError(f"{args.target}: {res.get('mismatches')} mismatches between the C and the integer model")
-    lut = res.get("baselines", {}).get("lut", {})
-    if lut.get("bit_exact") is False:
-        raise NnikError(f"{args.target}: the LUT baseline's C differs from its integer model in {lut['mismatches']} calls")
+    if args.mlp_pipeline:
+        res = pipeline.verify(out, args.target)
+        print_accuracy(pipeline.load_metrics(out))
+        if not res.get("bit_exact", False):
+            raise NnikError(f"{args.target}: {res.get('mismatches')} mismatches between the C and the integer model")
+        lut = res.get("baselines", {}).get("lut", {})
+        if lut.get("bit_exact") is False:
+            raise NnikError(f"{args.target}: the LUT baseline's C differs from its integer model in {lut['mismatches']} calls")
+        return
+    from nnik import pick_verify
+
+    name = pipeline.load_metrics(out)["name"]
+    if args.family:
+        _, res = pick_verify.verify_family(out, args.family, args.target)
+        what, st = f"c/alt/{args.family}/{name}.c", None
+    else:
+        st, res = pick_verify.verify_pick(out, args.target)
+        what = st.file
+    for k, r in res.items():
+        if "not_run" in r:
+            console.print(f"{what}: {k}: not run ({r['not_run']})")
+        elif "cycles" in r:
+            console.print(f"{what} ({r['c_hash']}): {k}: {r['cycles']:.0f} cycles, {r['flash_bytes']} B flash, "
+                          f"{r['mismatches']} mismatches on {r['points']} vectors ({r['path']} path)")
+        else:
+            console.print(f"{what} ({r['c_hash']}): {k}: {r['mismatches']} mismatches on {r['points']} points")
+    bad = {k: r for k, r in res.items() if "not_run" not in r and not r["bit_exact"]}
+    if bad:
+        again = f"; `nnik select {out}` writes the verified pick again" if st is not None else ""
+        raise NnikError(f"{what} as it is on disk differs from its integer model: "
+                        + ", ".join(f"{r['mismatches']} mismatches on {k}" for k, r in bad.items()) + again, str(out))
+    if args.target != "host" and "not_run" in res.get(args.target, {}):
+        raise NnikError(f"{args.target}: not run ({res[args.target]['not_run']})", str(out))
+    if st is not None:
+        console.print(st.message if st.ok else f"not yet deliverable: {st.message}")
 
 
 def cmd_estimate(args) -> None:
@@ -383,6 +420,9 @@ def cmd_job(args) -> None:
         out = Path(args.outdir) if args.outdir else pipeline.default_outdir(scn)
     if not (out / pipeline.MODEL_FILE).is_file():
         raise NnikError(f"no trained model (run `nnik run {args.scenario}` first)", str(out))
+    from nnik.pick_state import require_deliverable
+
+    require_deliverable(out, "job")  # the job runs the firmware: only the verified pick, never the MLP instead
     res = run_job(out, Path(args.job), seg_um=args.seg_um, use_chip=False if args.no_chip else None)
     t = Table(title=f"G-code job {res['job']} on {res['scenario']} ({res['seconds']:.2f} s of motion)")
     t.add_column("item")
@@ -431,9 +471,16 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--family", action="append", choices=("mlp", "poly", "lut", "hybrid"),
                    help="only these families (repeatable; default all)")
     p.set_defaults(func=cmd_select)
-    p = sub.add_parser("verify", help="run the generated C and compare it bit for bit with the integer model")
+    p = sub.add_parser("verify", help="run the C on disk (the pick by default) and compare it bit for bit with its "
+                                      "integer model, on the host and on --target")
     p.add_argument("model_dir")
-    p.add_argument("--target", default="host", choices=("host", "avr", "pic18"))
+    p.add_argument("--target", default="host", choices=("host", "avr", "pic18"),
+                   help="host, or a simulated chip (the host runs too)")
+    what = p.add_mutually_exclusive_group()
+    what.add_argument("--family", choices=("mlp", "poly", "lut", "hybrid"),
+                      help="the family's best in c/alt/FAMILY/ instead of the pick in c/NAME.c")
+    what.add_argument("--mlp-pipeline", action="store_true",
+                      help="the scenario's MLP in c/mlp/ (both kernels) and the baselines, as `nnik export` wrote them")
     p.set_defaults(func=cmd_verify)
     p = sub.add_parser("estimate", help="static prediction of cycles, flash and RAM on a target")
     p.add_argument("model_dir")

@@ -11,38 +11,18 @@ IkFn = Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]
 
 
 def picked_implementation(outdir: Path):
-    """The implementation nnik run picked (refitted, and checked to emit exactly the C that
-    OUTDIR/c/NAME.c holds), or None when there is no pick or it takes inputs in a unit other than
-    1 um (the firmware passes whole micrometres)."""
-    import json
+    """The implementation nnik run picked (refitted), when OUTDIR holds a finished pick whose
+    c/NAME.c is the C that was verified (:mod:`nnik.pick_state`, else the one-line NnikError it
+    gives); None when there is no finished pick or the pick takes inputs in a unit other than 1 um.
+    Commands that deliver firmware call ``pick_state.require_deliverable`` first, so for them the
+    None cases never get here; the fallback to the MLP below serves the library's own tests."""
+    from nnik import pick_state
+    from nnik.pick_verify import pick_implementation
 
-    from nnik import pipeline
-    from nnik.c_hash import dir_hash, files_hash
-    from nnik.errors import NnikError
-    from nnik.implementations import FAMILIES
-
-    mpath = Path(outdir) / pipeline.METRICS_FILE
-    try:
-        sel = json.loads(mpath.read_text()).get("selection") or {}
-    except (OSError, ValueError, AttributeError):
+    st = pick_state.status(Path(outdir))
+    if st.state == "none" or (st.marker or {}).get("input_unit_um", 1.0) != 1.0:
         return None
-    pick = sel.get("pick")
-    if not pick or sel.get("input_unit_um", 1.0) != 1.0 or pick.get("family") not in FAMILIES:
-        return None
-    key = (str(Path(outdir).resolve()), pick.get("model_hash"))
-    if key not in _PICKS:
-        problem = pipeline.problem_for(Path(outdir))
-        impl = FAMILIES[pick["family"]].fit(problem, pick["config"])
-        if impl.source_hash() != pick["model_hash"]:
-            raise NnikError("refitting the pick does not give the C nnik run exported; run `nnik run` again", str(outdir))
-        if dir_hash(Path(outdir) / pipeline.C_DIR, problem.name) != files_hash(impl.render_c()):
-            raise NnikError(f"c/{problem.name}.c or .h changed since nnik run picked it; run `nnik run` again",
-                            str(outdir))
-        _PICKS[key] = impl
-    return _PICKS[key]
-
-
-_PICKS: dict = {}
+    return pick_implementation(Path(outdir), st)
 
 
 def ik_oracle(outdir: Path) -> IkFn:

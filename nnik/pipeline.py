@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 from sklearn.linear_model import LinearRegression
 
+from nnik import pick_state
 from nnik.c_hash import dir_hash
 from nnik.data import Dataset, build_dataset
 from nnik.errors import NnikError
@@ -28,6 +29,7 @@ def default_outdir(scn: Scenario, normalize: bool = True) -> Path:
 
 def generate(scn: Scenario, outdir: Path) -> Dataset:
     outdir.mkdir(parents=True, exist_ok=True)
+    pick_state.invalidate(outdir)  # new data: no pick until select or search finishes again
     ds = build_dataset(scn)
     ds.save(outdir / DATA_FILE)
     return ds
@@ -54,6 +56,7 @@ def load_pair(outdir: Path) -> tuple[TrainedModel, Dataset]:
 def train(scn: Scenario, outdir: Path, normalize: bool | None = None, progress: bool = True) -> TrainedModel:
     ds = Dataset.load(outdir / DATA_FILE)
     check_data_matches(scn, ds, outdir)
+    pick_state.invalidate(outdir)
     model = train_model(scn, ds, normalize=normalize, progress=progress)
     model.save(outdir / MODEL_FILE)
     export_onnx(model, outdir / ONNX_FILE)
@@ -75,6 +78,7 @@ def evaluate(outdir: Path) -> dict:
     if not onnx_diff <= ONNX_TOLERANCE:
         raise NnikError(f"ONNX model differs from torch by {onnx_diff:.3g} (> {ONNX_TOLERANCE:g})", str(outdir / ONNX_FILE))
     shape = list(model.net.shape)
+    pick_state.invalidate(outdir)  # metrics.json is rewritten without a selection
     metrics = {
         "name": scn.name,
         "scenario": scn.source,
@@ -126,10 +130,12 @@ def _read_metrics(path: Path) -> dict:
 
 def write_metrics(outdir: Path, metrics: dict, merge: bool = True) -> None:
     """Write OUTDIR/metrics.json; later steps merge their own sections into it."""
+    from nnik.atomic_write import write_file_atomic
+
     path = outdir / METRICS_FILE
     old = _read_metrics(path) if merge and path.is_file() else {}
     old.update(metrics)
-    path.write_text(json.dumps(old, indent=2) + "\n")
+    write_file_atomic(path, json.dumps(old, indent=2) + "\n")  # a kill leaves the old file or the new one
 
 
 # ---- fixed point: quantise, generate C, verify on the host -----------------------------------
@@ -400,6 +406,7 @@ def select(outdir: Path, progress: bool = True, families=None, target: dict | No
 
     problem = problem_for(outdir)
     target = {**problem.scn.target, **(target or {})}
+    pick_state.invalidate(outdir)  # c/NAME.c and c/alt/ are about to change
     cands = sel.fit_ladder(problem, families, progress=(lambda **k: tqdm(leave=False, **k)) if progress else None,
                            max_error=target["max_error"])
     bests = sel.family_bests(cands, target)
@@ -423,4 +430,5 @@ def select(outdir: Path, progress: bool = True, families=None, target: dict | No
     write_metrics(outdir, {"selection": section, "implementations": section["implementations"]})
     if pick is None:
         raise NnikError(sel.no_pick_reason(cands, bests, target), problem.scn.source, "[target]")
+    pick_state.seal(outdir, section)  # last: the pick, its metrics and hashes are all in place
     return section

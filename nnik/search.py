@@ -24,7 +24,7 @@ import socket
 import time
 from pathlib import Path
 
-from nnik import pipeline
+from nnik import pick_state, pipeline
 from nnik import selection as sel
 from nnik.errors import NnikError
 from nnik.implementations import FAMILIES
@@ -315,6 +315,7 @@ def finish(outdir: Path, study, url: str | None, info: dict, progress: bool = Tr
 
     problem = fast_problem(pipeline.problem_for(outdir))
     target = problem.scn.target
+    pick_state.invalidate(outdir)  # c/alt/ and the pick are about to change
     # the pick comes from the front of the trials that meet [target]; the picture shows the whole front
     ok_front = front_trials(study, target, feasible_only=True)
     front = front_trials(study, target)
@@ -362,4 +363,5 @@ def finish(outdir: Path, study, url: str | None, info: dict, progress: bool = Tr
     pipeline.write_metrics(outdir, {"selection": section, "search": search_section})
     if pick is None:
         raise NnikError(sel.no_pick_reason(cands, bests, target), problem.scn.source, "[target]")
+    pick_state.seal(outdir, section)  # last: the pick, its metrics and hashes are all in place
     return {"selection": section, "search": search_section}

@@ -8,17 +8,22 @@ from pathlib import Path
 
 import numpy as np
 
-from nnik.c_hash import files_hash
+from nnik.c_hash import dir_hash, files_hash
 from nnik.errors import NnikError
 from nnik.implementations.base import Implementation
 
 HOST_RANDOM = 20_000
 
 
-def _write(impl: Implementation, c_dir: Path) -> None:
+def _write(impl: Implementation, c_dir: Path, write: bool = True) -> str | None:
+    """Write the implementation's C into c_dir (or, with ``write=False``, leave the files there
+    as they are); returns the hash of the C that will run."""
     from nnik.emit.export import write_sources
 
+    if not write:
+        return dir_hash(c_dir, impl.problem.name)
     write_sources(impl.render_c(), c_dir)
+    return files_hash(impl.render_c())
 
 
 def host_vectors(impl: Implementation, n_random: int = HOST_RANDOM, seed: int = 0) -> np.ndarray:
@@ -49,28 +54,29 @@ def target_vectors(impl: Implementation, n: int = 200, seed: int = 1) -> np.ndar
     return np.concatenate([rng.integers(lo, hi + 1, (n, 2)), corners, outside])
 
 
-def verify_host(impl: Implementation, c_dir: Path, vectors: np.ndarray | None = None) -> dict:
-    """Compile NAME.c (portable path) with sanitizers, run it, compare with the integer model."""
+def verify_host(impl: Implementation, c_dir: Path, vectors: np.ndarray | None = None, write: bool = True) -> dict:
+    """Compile NAME.c (portable path) with sanitizers, run it, compare with the integer model
+    (``write=False``: the NAME.{c,h} already in c_dir, as they are)."""
     from nnik.verify_host import run_host_driver
 
-    _write(impl, c_dir)
+    c_hash = _write(impl, c_dir, write)
     vec = host_vectors(impl) if vectors is None else vectors
     c = run_host_driver(c_dir, impl.problem.name, vec)
     r = impl.run(vec)
     bad = np.any(c["out"] != r.out, axis=1) | (c["flags"] != r.flags)
     return {"points": int(len(vec)), "mismatches": int(bad.sum()), "bit_exact": bool(not bad.any()),
-            "model_hash": impl.source_hash(), "c_hash": files_hash(impl.render_c())}
+            "model_hash": impl.source_hash(), "c_hash": c_hash}
 
 
 def verify_on_target(impl: Implementation, target: str, c_dir: Path, workdir: Path, portable: bool = False,
-                     vectors: np.ndarray | None = None, n_inside: int = 200) -> dict:
+                     vectors: np.ndarray | None = None, n_inside: int = 200, write: bool = True) -> dict:
     """Run NAME.c on the simulator; cycles are the mean over the random in-domain vectors."""
     from nnik.targets import TargetError, available, run_on_target
 
     ok, reason = available(target)
     if not ok:
         return {"not_run": reason, "model_hash": impl.source_hash()}
-    _write(impl, c_dir)
+    c_hash = _write(impl, c_dir, write)
     vec = target_vectors(impl, n_inside) if vectors is None else vectors
     name = impl.problem.name
     try:
@@ -87,4 +93,4 @@ def verify_on_target(impl: Implementation, target: str, c_dir: Path, workdir: Pa
             "flash_bytes": int(res["model_flash_bytes"]), "ram_bytes": int(res["model_ram_bytes"]),
             "points": int(len(vec)), "mismatches": int(bad.sum()), "bit_exact": bool(not bad.any()),
             "compiler": res["compiler"], "path": "portable" if portable else "fast",
-            "model_hash": impl.source_hash(), "c_hash": files_hash(impl.render_c())}
+            "model_hash": impl.source_hash(), "c_hash": c_hash}

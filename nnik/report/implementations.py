@@ -36,11 +36,21 @@ def _check_cell(r: dict, where: str) -> str:
     return "yes (fast + portable)" if len(ran) == len(cs) else "yes (fast; portable not run)"
 
 
+def not_verified_sentence(pick: dict | None) -> str | None:
+    """For a pick whose c/NAME.c is not the C that was verified (report.inputs.mark_pick): the
+    sentence that replaces every figure about it."""
+    if pick and pick.get("pick_not_verified"):
+        return f"The pick ({pick['family']}) is NOT verified: {pick['pick_not_verified']}."
+    return None
+
+
 def pick_sentence(sel: dict, unit: str) -> str:
     rows = sel["implementations"]
     tg = sel["target"]
     chip = tg["chip"]
     pick = next((r for r in rows if r.get("picked")), None)
+    if not_verified_sentence(pick):
+        return not_verified_sentence(pick)
     if pick is None:
         return f"No family met max_error {tg['max_error']:g} {unit} within the limits on {chip}."
     s = (f"nnik picks {pick['describe']}: {pick['pre_max']:.4f} {unit} before rounding, {pick['cycles'][chip]:.0f} "
@@ -133,7 +143,9 @@ def build(ctx) -> Section:
         row.append(num(r.get("pre_max"), D_UNIT, keypath(*base, "pre_max")))
         row.append(num(max(r.get("rms") or [float("nan")]), D_UNIT))
         current = _c_hash(ctx, r["family"])
-        if current is None or current != r.get("c_hash"):
+        if r.get("pick_not_verified"):
+            row.append(not_run_cell(f"c/{ctx.m.get('name')}.c NOT verified: {r['pick_not_verified']}", 5))
+        elif current is None or current != r.get("c_hash"):
             row.append(not_run_cell("the C in c/alt/" + r["family"] + "/ changed since it was measured", 5))
         else:
             for chip in CHIPS:
@@ -141,7 +153,7 @@ def build(ctx) -> Section:
             for chip in CHIPS:
                 row.append(num(lookup(r, "flash_bytes", chip), D_CYC, keypath(*base, "flash_bytes", chip)))
             row.append(txt(" / ".join(_check_cell(r, w) for w in ("host", *CHIPS))))
-        row.append(txt("PICK" if r.get("picked") else ""))
+        row.append(txt(("PICK (NOT verified)" if r.get("pick_not_verified") else "PICK") if r.get("picked") else ""))
         t.rows.append(row)
     sec.tables.append(t)
     if not searched(ctx.m):  # with a search, the front's figure above shows these points

@@ -68,6 +68,40 @@ def drop_stale(model_dir: Path, metrics: dict) -> dict:
     for t, res in list((metrics.get("targets") or {}).items()):
         if isinstance(res, dict) and "not_run" not in res and res.get("c_hash") != now:
             metrics["targets"][t] = {"not_run": STALE}
+    return mark_pick(model_dir, metrics)
+
+
+def mark_pick(model_dir: Path, metrics: dict) -> dict:
+    """The pick's row in the selection shows only figures measured on the bytes of c/NAME.c on
+    disk (nnik.pick_state decides): a pick that is not the verified one, or not a finished one,
+    keeps its name but says NOT verified, with both hashes and the command that mends it; a pick
+    re-verified by `nnik verify` after a change shows the figures of its new bytes.
+    metrics["pick_status"] holds the verdict."""
+    from nnik.pick_state import CHECKS, status
+
+    sel = metrics.get("selection")
+    row = next((r for r in sel.get("implementations") or [] if isinstance(r, dict) and r.get("picked")), None) \
+        if isinstance(sel, dict) else None
+    if row is None:
+        return metrics
+    st = status(Path(model_dir), str(metrics.get("name", "")))
+    metrics["pick_status"] = {"ok": st.ok, "state": st.state, "message": st.message, "file": st.file,
+                              "disk_hash": st.disk_hash, "verified_hash": st.verified_hash}
+    if st.ok:
+        if row.get("c_hash") != st.disk_hash:  # re-verified bytes: their own figures
+            row["host"] = st.check("host")
+            row["targets"] = {k: st.check(k) or {"not_run": f"not run on these bytes ({st.disk_hash})"}
+                              for k in CHECKS if k != "host"}
+            row["cycles"] = {k: (st.check(k) or {}).get("cycles") for k in ("avr", "pic18")}
+            row["flash_bytes"] = {k: (st.check(k) or {}).get("flash_bytes") for k in ("avr", "pic18")}
+        return metrics
+    why = {"not_run": f"NOT verified: {st.message}"}
+    row["describe"] = f"{row.get('describe')} — NOT verified: {st.message}"
+    row["host"] = dict(why)
+    row["targets"] = {k: dict(why) for k in CHECKS if k != "host"}
+    row["cycles"] = {"avr": None, "pic18": None}
+    row["flash_bytes"] = {"avr": None, "pic18": None}
+    row["pick_not_verified"] = st.message
     return metrics
 
 

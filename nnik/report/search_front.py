@@ -18,8 +18,8 @@ from __future__ import annotations
 
 from nnik.c_hash import dir_hash
 from nnik.report.document import D_CYC, D_UNIT, Cell, Fig, Section, Table, keypath, not_run_cell, num, txt
-from nnik.report.implementations import (CHIPS, _c_hash, _check_cell, best_point, estimated_costs, float_ik_cycles,
-                                         comparable, searched, versus_other_family)
+from nnik.report.implementations import (CHIPS, _c_hash, _check_cell, best_point, comparable, estimated_costs,
+                                         float_ik_cycles, not_verified_sentence, searched, versus_other_family)
 
 PNG = "search_front.png"
 PNGS = (PNG,)
@@ -57,6 +57,8 @@ def pick_sentence(ctx, srch: dict, sel: dict) -> str:
     tg, unit = sel["target"], ctx.unit
     chip = tg["chip"]
     pick = next((r for r in sel.get("implementations", []) if r.get("picked")), None)
+    if not_verified_sentence(pick):
+        return not_verified_sentence(pick)
     if pick is None or pick.get("cycles", {}).get(chip) is None:
         return f"The search found no point that meets max_error {tg['max_error']:g} {unit} within the limits on {chip}."
     if _c_hash(ctx, pick["family"]) != pick.get("c_hash"):
