@@ -403,8 +403,11 @@ def cmd_synth_csv(args) -> None:
     from nnik.synth import synthesize_measurements
 
     scn = load_scenario(args.scenario)
-    n = synthesize_measurements(scn, Path(args.output), args.n, args.noise_um, args.seed)
-    console.print(f"wrote {args.output}: {n} rows from {scn.source} with {args.noise_um:g} um measurement noise")
+    n = synthesize_measurements(scn, Path(args.output), args.n, args.noise_um, args.seed, readings=args.readings,
+                                sampling=args.sampling, inset_mm=args.inset_mm)
+    how = "whole-step counter readings at the marks" if args.readings == "rounded" else "whole-step commands"
+    console.print(f"wrote {args.output}: {n} rows from {scn.source} ({args.sampling}, {how}) with {args.noise_um:g} um "
+                  "position noise")
 
 
 def cmd_job(args) -> None:
@@ -512,6 +515,12 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("-o", "--output", required=True, help="CSV to write (x_um,y_um,q1,q2)")
     p.add_argument("-n", type=int, default=400, help="number of measured points")
     p.add_argument("--noise-um", type=float, default=2.0, help="measurement noise, 1 sigma, per axis")
+    p.add_argument("--readings", choices=("commanded", "rounded"), default="commanded",
+                   help="commanded: whole-step commands, the position measured (default); rounded: the head on each "
+                   "mark, q1/q2 the step counter's whole-step reading (+-0.5 of rounding)")
+    p.add_argument("--sampling", choices=("sobol", "grid"), default="sobol",
+                   help="scattered (sobol) marks or a k x k grid (k = ceil(sqrt(n)))")
+    p.add_argument("--inset-mm", type=float, default=0.05, help="marks this far inside [workspace] (default 0.05)")
     p.add_argument("--seed", type=int, default=0)
     p.set_defaults(func=cmd_synth_csv)
     p = sub.add_parser("job", help="run a G-code job through the firmware logic (Python and simulated Uno)")

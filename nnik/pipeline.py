@@ -391,9 +391,34 @@ def problem_for(outdir: Path):
 
     model, ds = load_pair(outdir)
     scn = model.scenario
-    problem = Problem(scn, ds, unit_um=scn.export["input_unit_um"])
+    reference = None
+    if not scn.mechanism.analytic:  # measured: the families compile a reference fitted to the marks
+        from nnik.reference import reference_for
+
+        reference = reference_for(scn, (model.predict, model.predict(ds.p["test"]) - ds.q["test"]))
+    scn = with_default_target(scn, reference.error_max if reference is not None else 0.0)
+    problem = Problem(scn, ds, unit_um=scn.export["input_unit_um"], reference=reference)
     remember_trained(problem, model)
     return problem
+
+
+DEFAULT_MAX_ERROR = 0.25  # output units: without [target] max_error, max(this, DEFAULT_FLOOR_FACTOR x error floor)
+DEFAULT_FLOOR_FACTOR = 1.25  # a measured machine's implementation may add a quarter of its reference's error
+
+
+def with_default_target(scn, error_floor: float):
+    """The scenario with [target] max_error filled in when the TOML does not give it:
+    max(DEFAULT_MAX_ERROR, DEFAULT_FLOOR_FACTOR x error floor), the floor being 0 for an exact IK
+    and the reference's estimated max error for a measured machine (whose readings may be coarser
+    than 0.25 of a unit). ``max_error_source`` says which."""
+    import dataclasses
+
+    if "max_error" in (scn.raw.get("target") or {}):
+        return dataclasses.replace(scn, target={**scn.target, "max_error_source": "scenario"})
+    value = float(f"{max(DEFAULT_MAX_ERROR, DEFAULT_FLOOR_FACTOR * error_floor):.3g}")
+    how = (f"default: max({DEFAULT_MAX_ERROR:g}, {DEFAULT_FLOOR_FACTOR:g} x the reference's estimated error "
+           f"{error_floor:.3g})" if error_floor else f"default: {DEFAULT_MAX_ERROR:g}")
+    return dataclasses.replace(scn, target={**scn.target, "max_error": value, "max_error_source": how})
 
 
 def select(outdir: Path, progress: bool = True, families=None, target: dict | None = None) -> dict:
@@ -406,6 +431,8 @@ def select(outdir: Path, progress: bool = True, families=None, target: dict | No
 
     problem = problem_for(outdir)
     target = {**problem.scn.target, **(target or {})}
+    if target.get("max_error") != problem.scn.target.get("max_error"):
+        target["max_error_source"] = "command line"
     pick_state.invalidate(outdir)  # c/NAME.c and c/alt/ are about to change
     cands = sel.fit_ladder(problem, families, progress=(lambda **k: tqdm(leave=False, **k)) if progress else None,
                            max_error=target["max_error"])
@@ -420,14 +447,17 @@ def select(outdir: Path, progress: bool = True, families=None, target: dict | No
         sel.write_choice(outdir / C_DIR, bests, pick)
     section = {
         "target": target, "input_unit_um": problem.unit_um, "check_points": int(len(problem.check[0])),
-        "check_set": "grid + edge + random check" if problem.analytic else "held-out rows",
+        "check_set": ("grid + edge + random check inside the marks' hull, against the reference" if problem.reference
+                      else "grid + edge + random check" if problem.analytic else "held-out rows"),
+        "error_floor": problem.error_floor,
         "implementations": [c.row(picked=c is pick) for c in bests.values()],
         "ladder": [c.row() for c in cands],
         "pick": None if pick is None else {"family": pick.family, "config": pick.config, "describe": pick.impl.describe(),
                                            "model_hash": pick.impl.source_hash(), "file": f"{problem.name}.c"},
     }
     # the families' table also sits at the top level, where issue 8 asked for it
-    write_metrics(outdir, {"selection": section, "implementations": section["implementations"]})
+    extra = {"reference": problem.reference.to_dict()} if problem.reference is not None else {}
+    write_metrics(outdir, {"selection": section, "implementations": section["implementations"], **extra})
     if pick is None:
         raise NnikError(sel.no_pick_reason(cands, bests, target), problem.scn.source, "[target]")
     pick_state.seal(outdir, section)  # last: the pick, its metrics and hashes are all in place

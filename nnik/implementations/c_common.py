@@ -38,4 +38,5 @@ def render_header(impl, accuracy: str = "see metrics.json") -> str:
         name=p.name, NAME=p.name.upper(), scenario_name=comment_safe(p.scn.name), family=impl.family,
         describe=comment_safe(impl.describe()), model_hash=impl.source_hash(), outputs=p.outputs, unit=p.unit,
         code_range=p.code_range, unit_um=unit_um, lo=[int(v) for v in p.lo], hi=[int(v) for v in p.hi],
-        accuracy=comment_safe(accuracy))
+        accuracy=comment_safe(accuracy),
+        truth=comment_safe(p.reference.describe(p.unit) if p.reference is not None else "the exact IK"))

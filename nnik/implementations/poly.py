@@ -246,6 +246,7 @@ class PolyImpl(Implementation):
         return environment().get_template("poly_ik.c.j2").render(
             name=name, NAME=name.upper(), scenario=comment_safe(p.scn.name), describe=comment_safe(self.describe()),
             maps=self.maps, shift_text=shift_text, symmetry=comment_safe(self.symmetry_text()), outs=outs,
+            symmetry_of="the exact IK" if p.reference is None else "the reference model",
             values=poly_c.values(self.prog), input_lines=poly_c.input_lines(self.maps, p.lo, p.hi, used=used),
             c_steps=poly_c.portable_steps(self.prog),
             c_out=poly_c.output_lines(self.prog, p.code_range, lambda a, b: f"(int32_t){a} * {b}"),

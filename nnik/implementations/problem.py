@@ -14,6 +14,11 @@ A :class:`Problem` is built once per scenario. It fixes
   4001 points along each edge, the corners and 200,000 random integer points, labelled with the
   exact IK, or the held-out rows of measured data.
 
+A measured machine with a ``reference`` (nnik.reference, fitted to the marks) is compiled like an
+analytic one: ``truth()`` is the reference, the check set is the dense set restricted to the
+marks' convex hull, and ``error_floor`` (the reference's estimated max error against the machine)
+is what selection adds to an implementation's error before comparing it with ``max_error``.
+
 Accuracy is always pre-rounding ``max |pre - truth|`` in output units on the check set.
 """
 
@@ -64,6 +69,7 @@ class Problem:
     dataset: object  # nnik.data.Dataset: the scenario's samples (the MLP trains on them)
     unit_um: float = 1.0
     cache: dict = field(default_factory=dict)  # families may keep fitted artefacts here (e.g. trained MLPs)
+    reference: object | None = None  # nnik.reference.Reference of a measured machine
 
     @property
     def name(self) -> str:
@@ -79,7 +85,18 @@ class Problem:
 
     @property
     def analytic(self) -> bool:
-        return bool(self.scn.mechanism.analytic)
+        """truth() is defined at every input: the exact IK, or a measured machine's reference."""
+        return bool(self.scn.mechanism.analytic) or self.reference is not None
+
+    @property
+    def measured(self) -> bool:
+        return not self.scn.mechanism.analytic
+
+    @property
+    def error_floor(self) -> float:
+        """Added to an implementation's error against truth() before it is judged against
+        max_error: the reference's estimated max error against the machine (0 for exact IK)."""
+        return self.reference.error_max if self.reference is not None else 0.0
 
     @property
     def code_range(self) -> tuple[int, int] | None:
@@ -110,9 +127,11 @@ class Problem:
         return np.rint(np.asarray(p_mm, dtype=np.float64) * (1000.0 / self.unit_um)).astype(np.int64)
 
     def truth(self, in_units: np.ndarray) -> np.ndarray:
-        """Exact IK in actuator units at integer inputs (analytic mechanisms only)."""
+        """Exact IK (or the measured machine's reference) in actuator units at integer inputs."""
         from nnik.data import exact_targets
 
+        if self.reference is not None:
+            return self.reference(self.to_mm(in_units))
         if not self.analytic:
             raise NnikError("a measured machine has no exact IK off its rows", self.scn.source)
         return exact_targets(self.scn, self.to_mm(in_units))
@@ -131,6 +150,8 @@ class Problem:
             # so random integer points are checked too
             rnd = np.random.default_rng(CHECK_SEED).integers(self.lo, self.hi + 1, (CHECK_RANDOM, 2))
             pts = np.concatenate([dense_grid(self.lo, self.hi), rnd])
+            if self.reference is not None:  # the reference is known only inside the marks' hull
+                pts = pts[self.reference.hull.inside(self.to_mm(pts), tol_mm=1e-6)]
             return pts, self.truth(pts)
         ds = self.dataset
         pts = self.to_units(ds.p["test"])

@@ -132,11 +132,22 @@ def check_coverage(p_mm: np.ndarray, lo: np.ndarray, hi: np.ndarray, src: str) -
         )
 
 
+def _noise_check(top: float):
+    return lambda v: None if 0 <= v <= top else f"must be in [0, {top:g}], got {v}"
+
+
 class Measured(Mechanism):
     kind = "measured"
     family = "measured"
     analytic = False
-    PARAMS = {"csv": Param("str", required=True, doc="calibration CSV, relative to the TOML")}
+    PARAMS = {
+        "csv": Param("str", required=True, doc="calibration CSV, relative to the TOML"),
+        "reading_step": Param("float", default=0.0, check=_noise_check(1e6),
+                              doc="q1/q2 are readings rounded to this step in actuator units (1: a step counter's "
+                                  "whole microsteps; +-step/2 of rounding, variance step^2/12); 0: not rounded"),
+        "noise_um": Param("float", default=0.0, check=_noise_check(1e4),
+                          doc="measurement noise of x_um/y_um, 1 sigma per axis, if known (0: estimated)"),
+    }
 
     def __init__(self, params, workspace, source="<scenario>"):
         super().__init__(params, workspace, source)
@@ -150,6 +161,7 @@ class Measured(Mechanism):
                 f"row {i + 1} at ({p_mm[i, 0]:.3f}, {p_mm[i, 1]:.3f}) mm lies outside [workspace]",
                 str(self.csv_path),
             )
+        self.rows = (p_mm, q)  # as read, repeats included: their spread is a noise estimate
         self.positions_mm, self.commands, self.duplicates_merged = merge_duplicates(p_mm, q)
         if len(self.positions_mm) < MIN_ROWS:
             raise NnikError(f"only {len(self.positions_mm)} distinct positions in {len(p_mm)} rows; need at least "
