@@ -3,7 +3,9 @@
 Build: avr-gcc/avr-g++ straight over the core's sources (arduino-core-avr, the Uno's
 ATmega328P at 16 MHz, the IDE's flags), the sketch and the library's src/. Run: the harness
 codegen/harness/arduino/nnik_simavr_job.c (linked against libsimavr) sends a job over UART0
-and records every STEP/DIR edge, the segment marker and the busy pin with cycle times.
+and records every STEP/DIR edge, the segment marker and the busy pin with cycle times. After
+the job's last line it sends M400 and waits for the answer, so every queued segment runs however
+the job ends; the motion pin (D7, high while the stepper has a segment) tells when it fell idle.
 """
 
 from __future__ import annotations
@@ -66,11 +68,18 @@ def _compile(src: Path, obj: Path, extra: list[str], cwd: Path) -> Path:
     return obj
 
 
+def _absolute(*paths) -> list[Path]:
+    """The paths made absolute against the caller's cwd: the tools below run with cwd= a build
+    folder, so a relative -o, input or library path would point inside that folder."""
+    return [Path(p).resolve() for p in paths]
+
+
 def build_core(workdir: Path) -> Path:
     """core.a of the Arduino AVR core for the Uno (cached in workdir)."""
     _require()
     core = CORE_ROOT / "cores" / "arduino"
-    out = Path(workdir) / "core"
+    (workdir,) = _absolute(workdir)
+    out = workdir / "core"
     lib = out / "core.a"
     if lib.is_file():
         return lib
@@ -92,7 +101,7 @@ class Firmware:
 
 def build_sketch(libdir: Path, example: str, workdir: Path) -> Firmware:
     """Compile examples/EXAMPLE/EXAMPLE.ino with the library's src/ and the core; link; size."""
-    libdir, workdir = Path(libdir), Path(workdir)
+    libdir, workdir = _absolute(libdir, workdir)
     core = build_core(workdir)
     sketch = libdir / "examples" / example / f"{example}.ino"
     bdir = workdir / example
@@ -116,10 +125,11 @@ def build_sketch(libdir: Path, example: str, workdir: Path) -> Firmware:
 def build_harness(workdir: Path) -> Path:
     """The simavr job runner, compiled for the host against libsimavr (cached by source hash)."""
     _require()
+    (workdir,) = _absolute(workdir)
     digest = hashlib.sha256(HARNESS_SRC.read_bytes()).hexdigest()[:12]
-    exe = Path(workdir) / f"nnik_simavr_job-{digest}"
+    exe = workdir / f"nnik_simavr_job-{digest}"
     if not exe.is_file():
-        Path(workdir).mkdir(parents=True, exist_ok=True)
+        workdir.mkdir(parents=True, exist_ok=True)
         tmp = exe.with_suffix(".tmp")
         run([find_tool("gcc"), "-O2", "-Wall", "-Wextra", "-Werror", HARNESS_SRC, "-o", tmp, "-lsimavr"],
             "build the simavr harness", cwd=workdir)
@@ -137,11 +147,12 @@ class ChipRun:
     busy: np.ndarray  # (B, 2) cycles: rise, fall of the busy pin
     end_cycle: int
     state: str
+    idle_cycle: int = 0  # the motion pin's last fall before the drain answer: the true end; 0: no motion
 
 
 def parse_events(text: str) -> ChipRun:
     replies, steps, marks, busy_edges = [], [], [], []
-    end_cycle, state = 0, "missing"
+    end_cycle, state, idle_cycle = 0, "missing", 0
     for line in text.splitlines():
         tag, _, rest = line.partition(" ")
         if tag == "R":
@@ -155,6 +166,8 @@ def parse_events(text: str) -> ChipRun:
         elif tag == "B":
             c, v = rest.split()
             busy_edges.append((int(c), int(v)))
+        elif tag == "D":
+            idle_cycle = int(rest.partition(" ")[0])
         elif tag == "E":
             parts = rest.split()
             end_cycle, state = int(parts[0]), parts[1]
@@ -163,15 +176,17 @@ def parse_events(text: str) -> ChipRun:
     n = min(len(rises), len(falls))
     return ChipRun(replies, np.asarray(steps, dtype=np.int64).reshape(-1, 3), np.asarray(marks, dtype=np.int64),
                    np.stack([rises[:n], falls[:n]], 1).astype(np.int64) if n else np.zeros((0, 2), np.int64),
-                   end_cycle, state)
+                   end_cycle, state, idle_cycle)
 
 
 def run_firmware(fw: Firmware, lines: list[str], workdir: Path, max_seconds: float) -> ChipRun:
-    """Send lines (then nothing) to the firmware on simavr; the run ends after the last answer."""
+    """Send lines to the firmware on simavr, then M400; the run ends when that is answered (all
+    the motion done; state "done"), the firmware halts, crashes or max_seconds pass."""
+    workdir, elf = _absolute(workdir, fw.elf)
     exe = build_harness(workdir)
-    job = Path(workdir) / "job_lines.txt"
+    job = workdir / "job_lines.txt"
     job.write_bytes("".join(f"{ln}\n" for ln in lines).encode("latin-1"))
-    res = run([exe, fw.elf, job, f"{max_seconds:g}"], "simavr job", cwd=workdir,
+    res = run([exe, elf, job, f"{max_seconds:g}"], "simavr job", cwd=workdir,
               timeout=120 + 60 * max_seconds, log=None)
     chip = parse_events(res.stdout)
     if chip.state == "missing":

@@ -64,7 +64,16 @@ def chip_run(outdir: Path, lines: list[str], cfg: MachineConfig, seconds: float,
             "flash_bytes": fw.flash_bytes, "ram_bytes": fw.ram_bytes, "state": run.state,
             "replies": [t for _, t in run.replies if not t.startswith("nnik ")], "run": run,
             "events": chip_events(run.steps, run.marks, CLOCK_HZ // cfg.tick_hz),
-            "segments_started": int(len(run.marks)), "end_cycle": run.end_cycle}
+            "segments_started": int(len(run.marks)), "end_cycle": run.end_cycle, **motion_times(run)}
+
+
+def motion_times(run) -> dict:
+    """When the chip's motion ended (the machine fell idle after the whole job) and how long it
+    ran from the first segment's start, in seconds of simulated time (None: it never fell idle)."""
+    if not run.idle_cycle:
+        return {"end_s": None, "motion_s": None}
+    first = int(run.marks[0]) if len(run.marks) else run.idle_cycle
+    return {"end_s": run.idle_cycle / CLOCK_HZ, "motion_s": (run.idle_cycle - first) / CLOCK_HZ}
 
 
 def write_step_counts(path: Path, steps: np.ndarray, start: np.ndarray) -> Path:
@@ -109,7 +118,8 @@ def run_job(outdir: Path, job_path: Path, seg_um: int | None = None, use_chip: b
         ev = c.pop("events")
         run = c.pop("run")
         c["steps_csv"] = str(write_step_counts(outdir / JOB_DIR / f"{job_path.stem}_chip_steps.csv", run.steps, seg.steps[0]))
-        same = ev.shape == events.shape and bool((ev == events).all())
+        same = (c["segments_started"] == res["segments"] and ev.shape == events.shape
+                and bool((ev == events).all()))
         busy = (run.busy[:, 1] - run.busy[:, 0]).astype(np.float64)
         c.update({"steps": int(len(ev)), "steps_equal": same, "replies_equal": c["replies"] == plan.replies})
         if len(busy) and res["segments"]:

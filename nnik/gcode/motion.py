@@ -55,6 +55,31 @@ def _div_round(a: int, b: int) -> int:
     return -q if a < 0 else q
 
 
+def r_centre(x: int, y: int, rad: int, ccw: bool) -> tuple[int, int]:
+    """The centre of an R-form arc as an offset (I, J) from its start, for the chord (x, y) and
+    the radius rad (not zero; negative: the long way round), as r_centre() in nnik_gcode.c:
+    (x, y) / 2 + sign * (-y, x) * s / (2 d), s = floor(sqrt(4 rad^2 - d^2)) (0 when the chord
+    is longer than 2|rad| by at most the end tolerance), d = |(x, y)| taken as floor(d * 2^k) / 2^k
+    with 2^29 <= d * 2^k < 2^30; the centre lies left of the chord for G3 and a positive R."""
+    d2 = x * x + y * y
+    if d2 == 0:
+        raise GcodeLineError("R arc ends at its start")
+    ra = abs(rad)
+    s = 0
+    if 4 * ra * ra < d2:
+        if isqrt(d2) > 2 * ra + 5 + ra // 1000:
+            raise GcodeLineError("arc chord longer than 2|R|")
+    else:
+        s = isqrt(4 * ra * ra - d2)
+    k, d2s = 0, d2
+    while d2s < 1 << 58:
+        d2s <<= 2
+        k += 1
+    ds = isqrt(d2s)
+    sign = 1 if ccw == (rad > 0) else -1
+    return (_div_round(x * ds - sign * (y << k) * s, 2 * ds), _div_round(y * ds + sign * (x << k) * s, 2 * ds))
+
+
 class Interpreter:
     """The state of nnik_gc_t without the IK: program position, modes, feed."""
 
@@ -142,6 +167,8 @@ class Interpreter:
                 raise GcodeLineError("feed below 1 mm/min")
         if ("I" in v or "J" in v) and motion < 2:
             raise GcodeLineError("I/J need G2 or G3")
+        if "R" in v and motion < 2:
+            raise GcodeLineError("R needs G2 or G3")
         tgt = list(self.pos)
         for k, axis in enumerate("XY"):
             if axis in v:
@@ -149,13 +176,21 @@ class Interpreter:
                 tgt[k] = self.pos[k] + val if rel else val
             if abs(tgt[k]) > POS_LIMIT:
                 raise GcodeLineError("coordinate out of range")
-        axes = any(a in v for a in "XYIJ")
+        axes = any(a in v for a in "XYIJR")
         c, r = None, 0
         if axes and motion >= 2:
-            if "I" not in v and "J" not in v:
-                raise GcodeLineError("arc needs I or J")
-            c = (self.pos[0] + (v["I"].to_um(inch) if "I" in v else 0),
-                 self.pos[1] + (v["J"].to_um(inch) if "J" in v else 0))
+            if "R" in v:
+                rad = v["R"].to_um(inch)
+                if "I" in v or "J" in v:
+                    raise GcodeLineError("arc with both R and I/J")
+                if rad == 0:
+                    raise GcodeLineError("arc radius is zero")
+                off = r_centre(tgt[0] - self.pos[0], tgt[1] - self.pos[1], rad, motion == 3)
+            elif "I" not in v and "J" not in v:
+                raise GcodeLineError("arc needs I, J or R")
+            else:
+                off = (v["I"].to_um(inch) if "I" in v else 0, v["J"].to_um(inch) if "J" in v else 0)
+            c = (self.pos[0] + off[0], self.pos[1] + off[1])
             if abs(c[0]) > POS_LIMIT or abs(c[1]) > POS_LIMIT:
                 raise GcodeLineError("coordinate out of range")
             a = (self.pos[0] - c[0], self.pos[1] - c[1])

@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 LINE_MAX = 95  # characters per line, comments included (NNIK_GC_LINE_MAX)
 INT_DIGITS_MAX = 9999
 DECIMALS_MAX = 5
-AXIS_LETTERS = "XYIJF"
+AXIS_LETTERS = "XYIJRF"
 
 
 class GcodeLineError(ValueError):
@@ -42,7 +42,7 @@ class Num:
 class Words:
     """What one line says: axis words, the motion command and modal changes it carries."""
 
-    values: dict[str, Num] = field(default_factory=dict)  # X Y I J F
+    values: dict[str, Num] = field(default_factory=dict)  # X Y I J R F
     motion: int | None = None
     inch: bool | None = None
     relative: bool | None = None

@@ -19,36 +19,16 @@ from nnik.data import exact_targets
 from nnik.gcode import chip
 from nnik.gcode.job import CLOCK_HZ, run_job
 from nnik.gcode.motion import interpret, plan_steps
-from nnik.ik_oracle import ik_oracle
 from nnik.gcode.parse import split_lines
 from nnik.gcode.steps import chip_events, model_events
-from tests.conftest import require_tool
+from tests.gcode.conftest import require_chip
 
 JOBS = Path(__file__).resolve().parents[2] / "datasets" / "jobs"
 
 
 @pytest.fixture(autouse=True)
 def toolchain():
-    for tool in ("avr-gcc", "avr-g++", "simavr"):
-        require_tool(tool)
-    why = chip.tool_missing_reason()
-    if why:
-        if os.environ.get("NNIK_REQUIRE_TOOLCHAINS") == "1":
-            pytest.fail(why)
-        pytest.skip(why)
-
-
-@pytest.fixture(scope="module")
-def firmware(galvo_run, corexy_run, tmp_path_factory):
-    """Per scenario: (model dir, library info, the built G-code firmware, the IK oracle)."""
-    out = {}
-    for name, run in (("galvo_cba2012", galvo_run), ("corexy_nonlinear", corexy_run)):
-        pipeline.export(run)
-        work = tmp_path_factory.mktemp(name)
-        lib = export_arduino(run, work / "lib")
-        fw = chip.build_sketch(work / "lib", f"{name}_gcode", work / "build")
-        out[name] = (run, lib, fw, ik_oracle(run), work / "build")
-    return out
+    require_chip()
 
 
 def exact_min_events(run, plan, cfg) -> int:

@@ -53,7 +53,7 @@ def test_inch_and_incremental_modes_stay_modal():
 
 @pytest.mark.parametrize("line, msg", [
     ("G1 X1 I2", "I/J need G2 or G3"),
-    ("G2 X1 Y1", "arc needs I or J"),
+    ("G2 X1 Y1", "arc needs I, J or R"),
     ("G2 X10 I1", "arc end is off the circle"),
     ("G2 I0 J0", "arc radius is zero"),
     ("G1 X1 F0.5", "feed below 1 mm/min"),

@@ -32,7 +32,11 @@ static NNIK_FLASH const char M_CMD[] = "unsupported %c%d";
 static NNIK_FLASH const char M_REPEAT[] = "repeated word %c";
 static NNIK_FLASH const char M_TWO[] = "two motion commands";
 static NNIK_FLASH const char M_IJ[] = "I/J need G2 or G3";
-static NNIK_FLASH const char M_ARCIJ[] = "arc needs I or J";
+static NNIK_FLASH const char M_RG[] = "R needs G2 or G3";
+static NNIK_FLASH const char M_ARCIJ[] = "arc needs I, J or R";
+static NNIK_FLASH const char M_RIJ[] = "arc with both R and I/J";
+static NNIK_FLASH const char M_RFULL[] = "R arc ends at its start";
+static NNIK_FLASH const char M_CHORD[] = "arc chord longer than 2|R|";
 static NNIK_FLASH const char M_FEED[] = "feed below 1 mm/min";
 static NNIK_FLASH const char M_RANGE[] = "coordinate out of range";
 static NNIK_FLASH const char M_R0[] = "arc radius is zero";
@@ -284,6 +288,41 @@ static void arc_to(nnik_gc_t *g, const int32_t c[2], const int32_t end[2], uint3
     }
 }
 
+/* The centre of an R-form arc as an offset ij from its start, for the chord (x, y) and the
+ * radius rad (not zero; negative: the long way round), dir > 0 for G3; 0 or an error template.
+ *     ij = (x, y) / 2 + sign * (-y, x) * s / (2 d),  s = floor(sqrt(4 rad^2 - d^2))
+ * (s = 0 when the chord is longer than 2|rad| by at most the end tolerance), rounded half away
+ * from zero, with d = |(x, y)| taken as floor(d * 2^k) / 2^k, 2^29 <= d * 2^k < 2^30: every
+ * product stays below 2^61.  The centre lies left of the chord for G3 with a positive R. */
+static const char *r_centre(int32_t x, int32_t y, int32_t rad, int8_t dir, int32_t ij[2])
+{
+    uint64_t d2 = sq2(x, y), d2s = d2, r2x4;
+    uint32_t ra = (uint32_t)iabs32(rad), s = 0, ds;
+    int64_t xs = x, ys = y;
+    if (d2 == 0)
+        return M_RFULL;
+    r2x4 = 4 * (uint64_t)ra * ra;
+    if (r2x4 < d2) {
+        if (nnik_isqrt64(d2) > 2 * ra + 5 + ra / 1000)
+            return M_CHORD;
+    } else {
+        s = nnik_isqrt64(r2x4 - d2);
+    }
+    while (d2s < (1ULL << 58)) {
+        d2s <<= 2;
+        xs *= 2;
+        ys *= 2;
+    }
+    ds = nnik_isqrt64(d2s);
+    if ((dir > 0) != (rad > 0)) {
+        xs = -xs;
+        ys = -ys;
+    }
+    ij[0] = div_round((int64_t)x * ds - ys * (int64_t)s, 2 * ds);
+    ij[1] = div_round((int64_t)y * ds + xs * (int64_t)s, 2 * ds);
+    return 0;
+}
+
 /* ---------------------------------------------------------------- parsing */
 typedef struct {
     uint8_t have, neg, dot, nd;
@@ -291,7 +330,7 @@ typedef struct {
     uint32_t fr;
 } num_t;
 
-enum { W_X, W_Y, W_I, W_J, W_F, W_N };
+enum { W_X, W_Y, W_I, W_J, W_R, W_F, W_N, W_COUNT };
 
 /* scan [+-]digits[.digits] at *ps; 0 or an error template */
 static const char *scan_num(const char **ps, num_t *n)
@@ -346,7 +385,7 @@ int8_t nnik_gc_line(nnik_gc_t *g, const char *line)
     const char *s;
     const char *err;
     uint8_t i = 0, in_comment = 0, wait = 0, motion = 0xff, inch = g->inch, rel = g->relative;
-    num_t w[6];
+    num_t w[W_COUNT];
     int32_t tgt[2], feed;
     char c;
 
@@ -374,7 +413,7 @@ int8_t nnik_gc_line(nnik_gc_t *g, const char *line)
         return fail(g, M_COMMENT, 0, 0);
     buf[i] = 0;
 
-    for (i = 0; i < 6; i++)
+    for (i = 0; i < W_COUNT; i++)
         w[i].have = 0;
     for (s = buf; *s;) {
         num_t n;
@@ -387,6 +426,7 @@ int8_t nnik_gc_line(nnik_gc_t *g, const char *line)
         case 'Y': idx = W_Y; break;
         case 'I': idx = W_I; break;
         case 'J': idx = W_J; break;
+        case 'R': idx = W_R; break;
         case 'F': idx = W_F; break;
         case 'N': idx = W_N; break;
         case 'G': case 'M': break;
@@ -433,6 +473,8 @@ int8_t nnik_gc_line(nnik_gc_t *g, const char *line)
     }
     if ((w[W_I].have || w[W_J].have) && motion < 2)
         return fail(g, M_IJ, 0, 0);
+    if (w[W_R].have && motion < 2)
+        return fail(g, M_RG, 0, 0);
     for (i = 0; i < 2; i++) {
         tgt[i] = g->pos[i];
         if (w[i].have) {
@@ -443,16 +485,29 @@ int8_t nnik_gc_line(nnik_gc_t *g, const char *line)
             return fail(g, M_RANGE, 0, 0);
     }
     {
-        uint8_t axes = w[W_X].have || w[W_Y].have || w[W_I].have || w[W_J].have;
+        uint8_t axes = w[W_X].have || w[W_Y].have || w[W_I].have || w[W_J].have || w[W_R].have;
         int32_t c2[2];
         uint32_t r = 0;
         if (axes && motion >= 2) {
-            int32_t a0, a1, e0, e1;
+            int32_t a0, a1, e0, e1, off[2];
             uint32_t re, tol;
-            if (!w[W_I].have && !w[W_J].have)
+            if (w[W_R].have) {
+                int32_t rad = to_um(&w[W_R], inch);
+                if (w[W_I].have || w[W_J].have)
+                    return fail(g, M_RIJ, 0, 0);
+                if (rad == 0)
+                    return fail(g, M_R0, 0, 0);
+                err = r_centre(tgt[0] - g->pos[0], tgt[1] - g->pos[1], rad, motion == 3 ? 1 : -1, off);
+                if (err)
+                    return fail(g, err, 0, 0);
+            } else if (!w[W_I].have && !w[W_J].have) {
                 return fail(g, M_ARCIJ, 0, 0);
-            c2[0] = g->pos[0] + (w[W_I].have ? to_um(&w[W_I], inch) : 0);
-            c2[1] = g->pos[1] + (w[W_J].have ? to_um(&w[W_J], inch) : 0);
+            } else {
+                off[0] = w[W_I].have ? to_um(&w[W_I], inch) : 0;
+                off[1] = w[W_J].have ? to_um(&w[W_J], inch) : 0;
+            }
+            c2[0] = g->pos[0] + off[0];
+            c2[1] = g->pos[1] + off[1];
             if (c2[0] > POS_LIMIT || c2[0] < -POS_LIMIT || c2[1] > POS_LIMIT || c2[1] < -POS_LIMIT)
                 return fail(g, M_RANGE, 0, 0);
             a0 = g->pos[0] - c2[0];

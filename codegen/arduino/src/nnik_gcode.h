@@ -5,8 +5,10 @@
  * Python model (nnik.gcode) reproduces it bit for bit.
  *
  * Words: G0 G1 G2 G3 (modal motion), G20/G21 (inch/mm), G90/G91 (absolute/incremental),
- * X Y (end point), I J (arc centre offset from the start, always incremental), F (feed per
- * minute), N (ignored), M2/M30/M400 (wait until the motion is done).  Comments: (...) and ';'.
+ * X Y (end point), I J (arc centre offset from the start, always incremental) or R (arc radius;
+ * negative: the arc longer than half a turn; an end at the start, or a chord longer than 2|R|
+ * beyond the end tolerance, is an error), F (feed per minute), N (ignored), M2/M30/M400 (wait
+ * until the motion is done).  Comments: (...) and ';'.
  *
  * Motion: a line is cut into ceil(L / NNIK_GC_SEG_UM) equal segments; an arc into quarter
  * turns and those by bisection until every chord is <= NNIK_GC_SEG_UM.  At each segment end the

@@ -4,6 +4,9 @@
  * the answer to the previous one, as a G-code sender does) and record, with cycle times:
  *
  *   R <cycle> <text>        a line the firmware printed (banner, "ok", "error: ...")
+ *   D <cycle> <text>        the answer to the drain query sent after the job (DRAIN below);
+ *                           the cycle is when the motion pin (PD7) last fell: the machine's
+ *                           queue ran dry after its last tick (0: no segment ever ran)
  *   S <cycle> <motor> <dir> a rising edge on a STEP pin (motor 0: PD2, 1: PD3) and the DIR
  *                           pin level then (PD5, PD6)
  *   M <cycle>               the segment marker (PD4) changed: a segment started
@@ -11,9 +14,11 @@
  *   E <cycle> <state> <replies>   the end (state: "done", "halted", "timeout", "crashed")
  *
  * usage: nnik_simavr_job FIRMWARE.elf JOB_LINES MAX_SECONDS
- * JOB_LINES holds the lines to send, one per line.  The run ends after the answer to the last
- * line (send M400 last to wait for the motion), after MAX_SECONDS of simulated time, or when
- * the firmware crashes.
+ * JOB_LINES holds the lines to send, one per line.  After the answer to the last line the
+ * harness sends DRAIN (M400: the sketch answers it once its segment queue is empty and the last
+ * step is out), so the run covers all the motion however the job ends; the run ends with the
+ * answer to DRAIN, after MAX_SECONDS of simulated time, when the firmware halts (the self-test)
+ * or when it crashes.
  */
 #include <stdio.h>
 #include <stdlib.h>
@@ -26,6 +31,7 @@
 #include <simavr/avr_uart.h>
 
 #define CLOCK_HZ 16000000UL
+#define DRAIN "M400\n"
 
 static avr_t *avr;
 static avr_irq_t *uart_in;
@@ -35,6 +41,7 @@ static int n_lines, n_replies, xoff;
 static int pin_state[2][8];   /* [port B, D][bit]: last level seen */
 static char out_line[256];
 static size_t out_len;
+static unsigned long long idle_fall; /* the motion pin's last falling edge */
 
 static void pump(void)
 {
@@ -68,6 +75,7 @@ static void on_xoff(struct avr_irq_t *irq, uint32_t value, void *param)
 
 static void on_uart(struct avr_irq_t *irq, uint32_t value, void *param)
 {
+    int banner, answer;
     (void)irq; (void)param;
     if (value != '\n') {
         if (out_len < sizeof out_line - 1)
@@ -75,10 +83,15 @@ static void on_uart(struct avr_irq_t *irq, uint32_t value, void *param)
         return;
     }
     out_line[out_len] = 0;
-    printf("R %llu %s\n", (unsigned long long)avr->cycle, out_line);
     out_len = 0;
-    if (strncmp(out_line, "nnik ", 5) == 0 || strcmp(out_line, "ok") == 0 || strncmp(out_line, "error:", 6) == 0) {
-        if (out_line[0] != 'n')
+    banner = strncmp(out_line, "nnik ", 5) == 0;
+    answer = strcmp(out_line, "ok") == 0 || strncmp(out_line, "error:", 6) == 0;
+    if (answer && n_replies == n_lines)
+        printf("D %llu %s\n", idle_fall, out_line);
+    else
+        printf("R %llu %s\n", (unsigned long long)avr->cycle, out_line);
+    if (banner || answer) {
+        if (answer)
             n_replies++;
         queue_next_line();
     }
@@ -98,6 +111,8 @@ static void on_pin(struct avr_irq_t *irq, uint32_t value, void *param)
         printf("S %llu %d %d\n", (unsigned long long)avr->cycle, bit - 2, pin_state[1][bit + 3]);
     else if (port == 1 && bit == 4)
         printf("M %llu\n", (unsigned long long)avr->cycle);
+    else if (port == 1 && bit == 7 && !value)
+        idle_fall = avr->cycle;
     else if (port == 0 && bit == 0)
         printf("B %llu %u\n", (unsigned long long)avr->cycle, value);
 }
@@ -134,7 +149,7 @@ int main(int argc, char **argv)
     fseek(f, 0, SEEK_END);
     job_len = (size_t)ftell(f);
     fseek(f, 0, SEEK_SET);
-    job = malloc(job_len + 1);
+    job = malloc(job_len + sizeof DRAIN);
     if (!job || fread(job, 1, job_len, f) != job_len) {
         fprintf(stderr, "cannot read %s\n", argv[2]);
         return 2;
@@ -142,6 +157,8 @@ int main(int argc, char **argv)
     fclose(f);
     for (i = 0; i < (int)job_len; i++)
         n_lines += job[i] == '\n';
+    memcpy(job + job_len, DRAIN, sizeof DRAIN); /* sent after the job's last line */
+    job_len += sizeof DRAIN - 1;
     limit = (unsigned long long)(atof(argv[3]) * CLOCK_HZ);
 
     avr = avr_make_mcu_by_name("atmega328p");
@@ -162,7 +179,7 @@ int main(int argc, char **argv)
     avr_irq_register_notify(avr_io_getirq(avr, AVR_IOCTL_UART_GETIRQ('0'), UART_IRQ_OUTPUT), on_uart, NULL);
     avr_irq_register_notify(avr_io_getirq(avr, AVR_IOCTL_UART_GETIRQ('0'), UART_IRQ_OUT_XON), on_xon, NULL);
     avr_irq_register_notify(avr_io_getirq(avr, AVR_IOCTL_UART_GETIRQ('0'), UART_IRQ_OUT_XOFF), on_xoff, NULL);
-    for (i = 2; i <= 6; i++)
+    for (i = 2; i <= 7; i++)
         watch('D', i, 8 + i);
     watch('B', 0, 0);
 
@@ -172,7 +189,7 @@ int main(int argc, char **argv)
             state = rc == cpu_Done ? "halted" : "crashed";
             break;
         }
-        if (n_lines > 0 && n_replies >= n_lines) {
+        if (n_replies > n_lines) { /* DRAIN answered */
             state = "done";
             break;
         }
