@@ -75,3 +75,19 @@ def test_random_lines_good_and_bad(corexy_lib):
     n_err = sum(r != "ok" for r in plan.replies)
     assert 20 < n_err < len(lines) - 100  # both kinds were exercised
     assert len(plan.ends) > 1000
+
+
+def test_r_arcs_at_the_limits_and_random(corexy_lib):
+    """R arcs under UBSan/ASan: 1 um chords with R = 9999 in (the largest shift and root), R
+    arcs at the 2|R| tolerance and beyond, and 200 random ones, short and long, both ways."""
+    outdir, lib, info = corexy_lib
+    rng = np.random.default_rng(2)
+    lines = ["G20 G91 G2 X0.00004 Y-0.00004 R9999", "G3 X-0.00004 R9999.9", "G2 X0.00003 Y0.0001 R-0.0001",
+             "G21 G90 G0 X0 Y0", "G2 X0.001 R0.001", "G3 X0.002 R-0.0005", "G2 X5 R2.5", "G3 X0 R2.499",
+             "G3 X5 R2.49", "G2 X1 I1 R1", "G1 X1 R1", "G2 R5", "G3 Y5 R0"]
+    for _ in range(200):
+        x, y = rng.uniform(-20, 20, 2)
+        lines.append(f"G{rng.integers(2, 4)} X{x:.3f} Y{y:.3f} R{rng.uniform(-30, 30):.3f} F9000")
+    plan = compare(outdir, lib, info, lines)
+    ok = sum(r == "ok" for r in plan.replies)
+    assert 100 < ok < len(lines) - 50  # R arcs drawn and R arcs refused

@@ -2,13 +2,16 @@
 
 from __future__ import annotations
 
+import math
 from math import ceil, isqrt
 
 import numpy as np
 import pytest
+from hypothesis import assume, given, settings
+from hypothesis import strategies as st
 
 from nnik.firmware_config import MachineConfig
-from nnik.gcode.motion import Interpreter, interpret, plan_steps
+from nnik.gcode.motion import Interpreter, interpret, plan_steps, r_centre
 
 CFG = MachineConfig(origin_um=(0, 0), seg_um=500)
 
@@ -54,6 +57,11 @@ def test_inch_and_incremental_modes_stay_modal():
 @pytest.mark.parametrize("line, msg", [
     ("G1 X1 I2", "I/J need G2 or G3"),
     ("G2 X1 Y1", "arc needs I, J or R"),
+    ("G2 X12 R4.9", "arc chord longer than 2|R|"),
+    ("G3 X1 Y1 R-1", "R arc ends at its start"),
+    ("G2 X2 I1 R1", "arc with both R and I/J"),
+    ("G1 X2 R1", "R needs G2 or G3"),
+    ("G2 X2 R0", "arc radius is zero"),
     ("G2 X10 I1", "arc end is off the circle"),
     ("G2 I0 J0", "arc radius is zero"),
     ("G1 X1 F0.5", "feed below 1 mm/min"),
@@ -82,3 +90,31 @@ def test_ticks_follow_the_feed_and_never_outrun_the_steps():
     seg = plan_steps(fast, CFG, lambda p: (p // 1, np.zeros(len(p), np.int64)))  # 1 um per step
     assert np.all(seg.ticks >= np.abs(seg.delta).max(1))
     assert np.all(seg.ticks == 500)
+
+
+@settings(max_examples=400, deadline=None, database=None)
+@given(x=st.integers(-(2**29 - 2), 2**29 - 2), y=st.integers(-(2**29 - 2), 2**29 - 2), extra=st.integers(0, 2**28),
+       long_way=st.booleans(), ccw=st.booleans())
+def test_r_centre_lies_at_r_from_both_ends_on_the_asked_side(x, y, extra, long_way, ccw):
+    """Over every chord the firmware can meet (|x|, |y| < 2^29 um) and every R up to 9999 in, the
+    integer centre is within 2.5 um of the exact one (so the arc passes the end check) and on the
+    side that makes the arc short (or long for negative R) in the asked direction."""
+    d = math.hypot(x, y)
+    rad = min(math.ceil(d / 2) + extra, 254_000_000)
+    assume(d > 0 and d <= 2 * rad)
+    i, j = r_centre(x, y, -rad if long_way else rad, ccw)
+    h = math.sqrt(max(rad * rad - d * d / 4, 0.0))
+    side = 1 if ccw != long_way else -1  # left of the chord
+    exact = (x / 2 - side * h * y / d, y / 2 + side * h * x / d)
+    assert math.hypot(i - exact[0], j - exact[1]) <= 2.5
+    assert abs(math.hypot(i, j) - rad) <= 2.5 and abs(math.hypot(i - x, j - y) - rad) <= 2.5
+    if h > 3:
+        assert (x * j - y * i > 0) == (side > 0)
+
+
+def test_r_arcs_short_long_and_semicircle():
+    plan, e = ends(["G0 X10", "G3 X0 Y10 R10", "G3 X10 Y0 R-10", "G2 X0 Y0 R5", "G2 X10 R4.9999"])
+    quarter, three_quarters, half, half_at_tol = plan.moves[1:]
+    assert quarter.center == (0, 0) and three_quarters.center == (0, 0)
+    assert three_quarters.n_seg == 3 * quarter.n_seg
+    assert half.center == (5000, 0) and half_at_tol.center == (5000, 0)  # 0.1 um short of 2R: within the tolerance
