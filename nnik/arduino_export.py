@@ -73,7 +73,7 @@ def export_arduino(outdir: Path, libdir: Path, machine: MachineConfig | None = N
     ctx = dict(name=name, scenario=c_comment_safe(scn.source), libname=libname, version=VERSION,
                shape=c_comment_safe(what).replace('"', "'"),
                description=c_comment_safe(scn.raw.get("description") or name), unit=scn.unit, outputs=scn.outputs, model_hash=hash_,
-               origin=list(machine.origin_um), seg_um=machine.seg_um, tick_hz=machine.tick_hz,
+               origin=list(machine.origin_um), seg_um=machine.seg_um, tick_hz=machine.tick_hz, homepage=homepage(),
                rapid_um_min=machine.rapid_um_min, feed_um_min=machine.feed_um_min, rows=rows, n=len(rows))
     env = _env()
     files = {
@@ -89,6 +89,24 @@ def export_arduino(outdir: Path, libdir: Path, machine: MachineConfig | None = N
         path.parent.mkdir(parents=True, exist_ok=True)
         path.write_text(env.get_template(tmpl).render(**ctx, example=path.parent.name, libdir_name=libdir.resolve().name))
     return {"libname": libname, "dir": str(libdir), "name": name, "machine": machine, "golden": len(rows)}
+
+
+def homepage() -> str:
+    """The project's homepage, from one place: pyproject.toml's [project.urls] Homepage (the
+    source checkout's file, else the installed package's metadata). Empty when none is set, as
+    now: nnik publishes none, and the README says how to fill the library's url= field."""
+    import tomllib
+    from importlib import metadata
+
+    pyproject = Path(__file__).resolve().parents[1] / "pyproject.toml"
+    if pyproject.is_file():
+        urls = tomllib.loads(pyproject.read_text()).get("project", {}).get("urls", {})
+        return str(urls.get("Homepage", ""))
+    try:
+        entries = metadata.metadata("nnik").get_all("Project-URL") or []
+    except metadata.PackageNotFoundError:
+        return ""
+    return next((u.strip() for label, _, u in (e.partition(",") for e in entries) if label.strip() == "Homepage"), "")
 
 
 def _shape(outdir: Path) -> list[int]:

@@ -189,8 +189,12 @@ def _search_and_print(out: Path, trials: int, args=None) -> None:
             print_selection(pipeline.load_metrics(out))
     s = res["search"]
     rate = f", {s['trials_per_min']:.1f} trials/min" if s.get("trials_per_min") else ""
-    console.print(f"search: {s['trials_run']} trials run in {s['seconds']:.0f} s{rate} ({s['storage']} storage, study "
-                  f"{s['study']})")
+    others = s["trials_added"] - s["trials_run"] if "trials_added" in s else 0
+    console.print(f"search: {s['trials_run']} trials run by this command ({s['jobs']} local job"
+                  f"{'s' * (s['jobs'] > 1)}) in {s['seconds']:.0f} s{rate}; the study holds {s.get('study_trials', '?')} "
+                  f"finished trials (asked for {s.get('trials_target', '?')}"
+                  + (f"; {others} run meanwhile by other workers" if others else "")
+                  + f") ({s['storage']} storage, study {s['study']})")
     if "front" in s:
         console.print(f"front: {len(s['front'])} points ({s['feasible_front']} on the front of those that meet "
                       f"\\[target]), families {', '.join(s['front_families'])}")
@@ -500,7 +504,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("target", metavar="OUTDIR_OR_SCENARIO", help="a trained output directory or a scenario TOML")
     p.add_argument("-o", "--outdir", help="output directory for a scenario TOML (default build/<name>/)")
     p.add_argument("--trials", type=int, default=200, help="finished trials the study should hold (default 200)")
-    p.add_argument("--storage", help="database URL, e.g. postgresql://USER@HOST:PORT/DB (default OUTDIR/search.journal)")
+    p.add_argument("--storage", help="database URL, e.g. postgresql://USER@HOST:PORT/DB, or journal:///FILE (a journal "
+                   "file other directories share; default OUTDIR/search.journal)")
     p.add_argument("--study", help="study name (default nnik-<scenario>)")
     p.add_argument("--jobs", type=int, default=1, help="local worker processes (default 1)")
     p.add_argument("--families", help="comma-separated families to search (default all)")

@@ -38,7 +38,7 @@ SEED = 20261123
 POPULATION = 20
 MUTATION = 0.25  # per parameter (Optuna's default is 1 / number of parameters, about 0.05 here)
 DIRECTIONS = ("minimize", "minimize", "minimize")
-WORKER = f"{socket.gethostname()}:{os.getpid()}"  # which process ran a trial (recorded with it)
+WORKER = f"{socket.gethostname()}:{os.getpid()}"  # which process ran a trial (recorded with it; worker_id)
 MAX_REFIT = 40  # front points refitted for the report's picture (cheapest on the chip first)
 
 
@@ -212,7 +212,7 @@ def search(outdir: Path, trials: int, url: str | None = None, name: str | None =
     name = name or study_name(scn)
     storage = open_storage(url, outdir)  # bad URL, unreachable server, other scenario: fail before any work
     study = open_study(storage, name, scn.fingerprint, scn.name, list(DIRECTIONS))
-    before = len(_finished(study))
+    before = {t.number for t in _finished(study)}
     if warm_start and not study.get_trials(deepcopy=False):
         warm(study, outdir, fams)
     t0 = time.perf_counter()
@@ -229,12 +229,27 @@ def search(outdir: Path, trials: int, url: str | None = None, name: str | None =
             p.join()
     seconds = time.perf_counter() - t0
     study = open_study(storage, name, scn.fingerprint, scn.name, list(DIRECTIONS))
-    ran = len(_finished(study)) - before
-    info = {"seconds": seconds, "trials_run": ran, "trials_per_min": 60.0 * ran / seconds if ran else None,
+    info = {"seconds": seconds, **trial_counts(study, before, {WORKER} | {worker_id(p.pid) for p in procs}, trials),
             "jobs": jobs, "families": fams}
+    info["trials_per_min"] = 60.0 * info["trials_run"] / seconds if info["trials_run"] else None
     if worker_only:
         return {"search": {"study": name, "storage": storage_kind(url), **info}}
     return finish(outdir, study, url, info, progress)
+
+
+def worker_id(pid: int) -> str:
+    """What a trial records as the process that ran it (see Objective)."""
+    return f"{socket.gethostname()}:{pid}"
+
+
+def trial_counts(study, before: set[int], mine: set[str], target: int) -> dict:
+    """This command's share of a study other processes may share: the trials it ran (its own
+    process and its --jobs workers), the trials every process added meanwhile, and what the study
+    holds now."""
+    new = [t for t in _finished(study) if t.number not in before]
+    ran = sum(t.user_attrs.get("worker") in mine for t in new)
+    return {"trials_run": ran, "trials_added": len(new), "study_trials": len(before) + len(new),
+            "trials_target": target}
 
 
 def warm(study, outdir: Path, families: list[str]) -> int:

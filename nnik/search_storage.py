@@ -17,24 +17,36 @@ RACE_RETRIES = 3
 RDB_SCHEMES = ("postgresql", "postgresql+psycopg2", "postgresql+psycopg", "sqlite")
 
 
+JOURNAL_SCHEME = "journal"  # journal:///PATH: a journal file that processes in several directories share
+
+
 def storage_kind(url: str | None) -> str:
     if url is None:
         return "journal"
     return url.split("://", 1)[0].split("+", 1)[0]
 
 
+def _journal(path: Path):
+    from optuna.storages.journal import JournalFileBackend, JournalFileOpenLock, JournalStorage
+
+    return JournalStorage(JournalFileBackend(str(path), lock_obj=JournalFileOpenLock(str(path))))
+
+
 def open_storage(url: str | None, outdir: Path):
-    """The Optuna storage for ``url`` (None: OUTDIR/search.journal)."""
+    """The Optuna storage for ``url`` (None: OUTDIR/search.journal; journal:///PATH: that file)."""
     import optuna
 
     if url is None:
-        from optuna.storages.journal import JournalFileBackend, JournalFileOpenLock, JournalStorage
-
-        path = str(outdir / JOURNAL_FILE)
-        return JournalStorage(JournalFileBackend(path, lock_obj=JournalFileOpenLock(path)))
+        return _journal(outdir / JOURNAL_FILE)
     scheme = url.split("://", 1)[0] if "://" in url else None
+    if scheme == JOURNAL_SCHEME:
+        path = Path(url.split("://", 1)[1])
+        if not path.parent.is_dir() or path.is_dir():
+            raise NnikError(f"storage URL {url!r}: {path} must be a file in an existing directory", "--storage")
+        return _journal(path)
     if scheme not in RDB_SCHEMES:
-        raise NnikError(f"storage URL {url!r}: expected postgresql://USER@HOST:PORT/DB (or sqlite:///FILE)", "--storage")
+        raise NnikError(f"storage URL {url!r}: expected postgresql://USER@HOST:PORT/DB, sqlite:///FILE or "
+                        "journal:///FILE", "--storage")
     if scheme == "postgresql":  # the driver nnik depends on (SQLAlchemy 2.1 would look for psycopg 3)
         url = "postgresql+psycopg2://" + url.split("://", 1)[1]
     for attempt in range(RACE_RETRIES + 1):

@@ -72,6 +72,11 @@ def test_reverified_bytes_become_the_pick(picked_run, tmp_path, capsys):
     capsys.readouterr()
     assert main(["export", str(run), "--arduino", str(lib)]) == 0
     assert (lib / "src" / f"{NAME}.c").read_bytes() == c.read_bytes()
+    # the library's url comes from pyproject's [project.urls] Homepage, empty while there is none
+    from nnik.arduino_export import homepage
+
+    props = dict(ln.split("=", 1) for ln in (lib / "library.properties").read_text().splitlines())
+    assert props["url"] == homepage() and "github.com/nnik" not in (lib / "library.properties").read_text()
     row = next(r for r in load_metrics(run)["selection"]["implementations"] if r["picked"])
     assert row["cycles"]["avr"] == st.check("avr")["cycles"] and row["host"]["c_hash"] == st.disk_hash
 
