@@ -93,7 +93,7 @@ def print_selection(m: dict) -> None:
             return "yes" if len(ran) == len(cs) else "yes (fast)"
 
         ok = "/".join(verdict(cs) for cs in checks)
-        meets = r["pre_max"] <= tg["max_error"]
+        meets = r.get("claimed_max", r["pre_max"]) <= tg["max_error"]
         t.add_row(r["family"], r["describe"], f"{r['pre_max']:.4f}" + ("" if meets else " (misses)"),
                   *[f"{cyc[k]:.0f}" if cyc.get(k) is not None else "-" for k in ("avr", "pic18")],
                   *[f"{fl[k]}" if fl.get(k) is not None else "-" for k in ("avr", "pic18")],
@@ -107,7 +107,25 @@ def print_selection(m: dict) -> None:
         figures = f": {cyc:.0f} cycles, {fl} B flash on {chip}" if cyc is not None and fl is not None else ""
         console.print(f"[bold]pick:[/bold] {pick['describe']} -> c/{pick['file']}{figures}, max {row.get('pre_max', 0):.4f} "
                       f"{unit} pre-rounding (every family's best in c/alt/<family>/)")
+        print_reference(m, row)
     console.print(t)
+
+
+def print_reference(m: dict, pick_row: dict) -> None:
+    """A measured machine: what its figures are measured against, the pick's claim, the hull warning."""
+    ref = m.get("reference")
+    if not isinstance(ref, dict):
+        return
+    unit = m["unit"]
+    cv = ", ".join(f"{k} {max(v['cv_rms']):.3f}" for k, v in ref["candidates"].items() if "cv_rms" in v)
+    console.print(f"reference: {ref['chosen']} fitted to {ref['marks']} marks (CV RMS {cv}); noise {ref['noise']['source']}; "
+                  f"est. error vs the machine max {ref['error_max']:.3g} {unit}, noise floor {ref['noise_floor']:.3g} {unit}")
+    if "claimed_max" in pick_row:
+        console.print(f"claimed max error of the pick: {pick_row['claimed_max']:.3g} {unit} = reference "
+                      f"{ref['error_max']:.3g} + implementation {pick_row['pre_max']:.3g} (vs the reference), inside the "
+                      "marks' hull")
+    if ref.get("workspace_warning"):
+        console.print(f"[bold yellow]warning:[/bold yellow] {ref['workspace_warning']}")
 
 
 def _outdir(args, scn, create: bool = False) -> Path:

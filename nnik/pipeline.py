@@ -386,20 +386,28 @@ def verify_target(outdir: Path, target: str) -> dict:
 # ---- every implementation family: fit, verify, pick ---------------------------------------------
 def problem_for(outdir: Path):
     """The implementation contract for OUTDIR's scenario, with its trained MLP cached in it."""
-    from nnik.implementations import Problem
     from nnik.implementations.mlp import remember_trained
 
     model, ds = load_pair(outdir)
-    scn = model.scenario
+    problem = build_problem(model.scenario, ds, model)
+    remember_trained(problem, model)
+    return problem
+
+
+def build_problem(scn, ds: Dataset, model=None):
+    """The Problem of a scenario: for a measured machine with its reference fitted to the marks
+    (the trained MLP, if given, a candidate scored on its held-out rows), and [target] max_error
+    filled in by with_default_target."""
+    from nnik.implementations import Problem
+
     reference = None
     if not scn.mechanism.analytic:  # measured: the families compile a reference fitted to the marks
         from nnik.reference import reference_for
 
-        reference = reference_for(scn, (model.predict, model.predict(ds.p["test"]) - ds.q["test"]))
+        mlp = None if model is None else (model.predict, model.predict(ds.p["test"]) - ds.q["test"])
+        reference = reference_for(scn, mlp)
     scn = with_default_target(scn, reference.error_max if reference is not None else 0.0)
-    problem = Problem(scn, ds, unit_um=scn.export["input_unit_um"], reference=reference)
-    remember_trained(problem, model)
-    return problem
+    return Problem(scn, ds, unit_um=scn.export["input_unit_um"], reference=reference)
 
 
 DEFAULT_MAX_ERROR = 0.25  # output units: without [target] max_error, max(this, DEFAULT_FLOOR_FACTOR x error floor)

@@ -19,7 +19,9 @@ Jacobian), then the spread of repeated marks, then the Gaussian process's fitted
 Error of the chosen reference against the machine, net of the noise: the CV residual r at a
 mark is (reference error there) + (noise), the two independent, so
 
-* RMS: ``sqrt(max(mean r^2 - noise variance, RMS_FLOOR^2 * mean r^2))``;
+* RMS: ``sqrt(max(mean r^2 + MS_MARGIN x its standard error - noise variance, RMS_FLOOR^2 x mean r^2))``
+  (with the noise near the fit error, the difference is small against the mean's own scatter: one
+  standard error keeps the estimate from going below the truth by luck of the draw);
 * max: ``MAX_OVER_RMS`` x that RMS, and never below the largest CV residual less the noise's own
   bound (3 sigma, or step/2 for rounding): the CV residuals are predictions a fold away from
   the marks, the same reach as the space between marks.
@@ -35,12 +37,14 @@ from typing import Callable
 
 import numpy as np
 
-FOLDS = 5
+FOLDS = 10  # k of the k-fold CV; leave-one-out up to LOO_MARKS marks (a fold then leaves the fewest gaps)
+LOO_MARKS = 100
 CV_SEED = 0
 POLY_DEGREES = (1, 2, 3, 4)
-RBF_SMOOTHING = (0.0, 1e-4, 1e-3, 1e-2, 1e-1, 1.0, 10.0)
+RBF_SMOOTHING = (0.0, 1e-4, 1e-3, 1e-2, 1e-1, 1.0, 10.0, 100.0)
 GP_MAX_MARKS = 1500  # a GP fit is O(n^3): beyond this it is left out (and the report says so)
 RBF_MAX_MARKS = 4000  # beyond this the spline is local (64 nearest marks)
+MS_MARGIN = 1.0  # standard errors of the CV mean square added before the noise is taken off (an upper estimate)
 RMS_FLOOR = 0.2  # the estimated RMS is at least this fraction of the CV RMS (the noise is never known exactly)
 MAX_OVER_RMS = 3.0  # max/RMS of a smooth error field over a dense 2-D grid (measured on synthetic machines)
 CHUNK = 100_000
@@ -196,12 +200,13 @@ class Reference:
                 f"vs the machine, noise floor {self.noise_floor:.3g}{u})")
 
     def to_dict(self) -> dict:
-        return {"chosen": self.name, "detail": self.detail, "marks": self.n_marks, "folds": FOLDS,
+        return {"chosen": self.name, "detail": self.detail, "marks": self.n_marks, "folds": folds_for(self.n_marks),
                 "candidates": self.scores, "noise": self.noise.to_dict(),
                 "cv_rms": self.cv_rms.tolist(), "cv_max_abs": self.cv_max.tolist(),
                 "est_rms": self.est_rms.tolist(), "est_max": self.est_max.tolist(), "error_max": self.error_max,
                 "noise_floor": self.noise_floor, "hull": self.hull.to_dict(),
-                "method": (f"{FOLDS}-fold CV among the candidates; est. RMS = sqrt(CV mean square - noise variance), "
+                "method": (f"{folds_for(self.n_marks)}-fold CV among the candidates; est. RMS = sqrt(CV mean square "
+                           f"+ {MS_MARGIN:g} standard error - noise variance), "
                            f"at least {RMS_FLOOR:g} x CV RMS; est. max = max({MAX_OVER_RMS:g} x est. RMS, largest CV "
                            "residual - the noise's bound)"), **self.extra}
 
@@ -233,14 +238,18 @@ def repeated_noise(p_mm: np.ndarray, q: np.ndarray) -> Noise | None:
     return Noise(var, 3 * np.sqrt(var), f"estimated from {int((counts > 1).sum())} repeated marks")
 
 
+def folds_for(n: int) -> int:
+    return n if n <= LOO_MARKS else FOLDS
+
+
 def _folds(n: int) -> np.ndarray:
-    return np.random.default_rng(CV_SEED).permutation(n) % FOLDS
+    return np.random.default_rng(CV_SEED).permutation(n) % folds_for(n)
 
 
 def _cv(fit, x, y, folds) -> np.ndarray:
     """Held-out residuals (n, 2) of `fit` over the folds (the affine map refitted per fold)."""
     res = np.empty_like(y)
-    for k in range(FOLDS):
+    for k in range(int(folds.max()) + 1):
         tr, te = folds != k, folds == k
         a, *_ = np.linalg.lstsq(_poly_features(x[tr], 1), y[tr], rcond=None)
         f = fit(x[tr], y[tr] - _poly_features(x[tr], 1) @ a)
@@ -280,7 +289,7 @@ def fit_reference(p_mm: np.ndarray, q: np.ndarray, noise: Noise | None = None,
     resid: dict[str, np.ndarray] = {}
     for d in POLY_DEGREES:
         nt = (d + 1) * (d + 2) // 2
-        if nt * 3 > n * (FOLDS - 1) / FOLDS:
+        if nt * 3 > n * (1 - 1 / folds_for(n)):
             scores[f"poly{d}"] = {"skipped": f"{nt} terms need at least {3 * nt} marks per fold"}
             continue
         fits[f"poly{d}"] = _fit_poly(d)
@@ -313,7 +322,8 @@ def fit_reference(p_mm: np.ndarray, q: np.ndarray, noise: Noise | None = None,
         ext = extra[chosen][0]
         pr = lambda xq: ext(xq * scale.h + scale.c) - _poly_features(xq, 1) @ a  # noqa: E731
     ms = (r ** 2).mean(0)
-    est_rms = np.sqrt(np.maximum(ms - noise.variance, RMS_FLOOR ** 2 * ms))
+    se = (r ** 2).std(0) / np.sqrt(n)  # standard error of the CV mean square: few marks, wide margin
+    est_rms = np.sqrt(np.maximum(ms - noise.variance + MS_MARGIN * se, RMS_FLOOR ** 2 * ms))
     est_max = np.maximum(MAX_OVER_RMS * est_rms, np.abs(r).max(0) - noise.bound)
     detail = f"smoothing {best_s:g}" if chosen == "rbf" else ""
     return Reference(chosen, n, pr, scale, a, noise, convex_hull(p_mm), scores, est_rms, est_max, _rms(r),

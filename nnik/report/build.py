@@ -4,8 +4,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from nnik.report import (accuracy, files, implementations, jobs, references, scenario, search_front, summary, tanh,
-                         targets, training, verification)
+from nnik.report import (accuracy, files, implementations, jobs, reference, references, scenario, search_front, summary,
+                         tanh, targets, training, verification)
 from nnik.report.context import Context
 from nnik.report.document import Section
 from nnik.report.inputs import Inputs, load_inputs
@@ -14,8 +14,8 @@ from nnik.report.render import render_html, render_markdown
 REPORT_DIRNAME = "report"
 # the sections, in the order the report shows them: each module has build(ctx) -> Section and
 # may list the PNGs it writes in PNGS (search_front: only with a search; its picture is the first)
-SECTIONS = (summary, search_front, implementations, jobs, scenario, accuracy, verification, tanh, targets, training,
-            references, files)
+SECTIONS = (summary, search_front, implementations, reference, jobs, scenario, accuracy, verification, tanh, targets,
+            training, references, files)
 ALL_PNGS = tuple(png for mod in SECTIONS for png in getattr(mod, "PNGS", ()))
 
 
