@@ -7,18 +7,18 @@ from dataclasses import dataclass
 import numpy as np
 
 from nnik.errors import NnikError
-from nnik.params import Param, positive
+from nnik.params import Param, within
 
 STEPPER = {
     "kind": Param("str", required=True),
-    "steps_per_rev": Param("int", default=200, check=positive, doc="full steps per revolution"),
-    "microsteps": Param("int", default=16, check=positive, doc="microsteps per full step"),
-    "mm_per_rev": Param("float", check=positive, doc="belt travel per motor revolution (belt machines)"),
+    "steps_per_rev": Param("int", default=200, check=within(1, 100_000), doc="full steps per revolution"),
+    "microsteps": Param("int", default=16, check=within(1, 1024), doc="microsteps per full step"),
+    "mm_per_rev": Param("float", check=within(0.0, 10_000.0, open_lo=True, unit=" mm"), doc="belt travel per motor revolution (belt machines)"),
 }
 DAC = {
     "kind": Param("str", required=True),
     "bits": Param("int", default=16, check=lambda v: None if 2 <= v <= 24 else f"must be 2..24, got {v}"),
-    "optical_range_deg": Param("float", default=40.0, check=positive, doc="full-scale optical swing"),
+    "optical_range_deg": Param("float", default=40.0, check=within(0.0, 180.0, open_lo=True, unit=" deg"), doc="full-scale optical swing"),
 }
 SCHEMAS = {"stepper": STEPPER, "dac": DAC}
 MAX_UNITS = 2.0**30  # commands the int32 outputs of the generated C carry with headroom

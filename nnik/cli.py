@@ -108,6 +108,10 @@ def print_selection(m: dict) -> None:
         console.print(f"[bold]pick:[/bold] {pick['describe']} -> c/{pick['file']}{figures}, max {row.get('pre_max', 0):.4f} "
                       f"{unit} pre-rounding (every family's best in c/alt/<family>/)")
         print_reference(m, row)
+        if not sel.get("pick_meets_max_error", True):
+            console.print(f"[bold yellow]note:[/bold yellow] no family met the default max_error {tg['max_error']:g} {unit} "
+                          "(the scenario has no \\[target] max_error), so the most accurate verified family best is the "
+                          "pick; set \\[target] max_error to make a miss an error")
     console.print(t)
 
 

@@ -29,6 +29,20 @@ def non_negative(v):
     return None if v >= 0 else f"must be >= 0, got {v}"
 
 
+MAX_LENGTH_MM = 100_000.0  # 100 m: no machine nnik serves is larger; beyond, int32 inputs and the C overflow
+
+
+def within(lo: float, hi: float, open_lo: bool = False, unit: str = ""):
+    """A check for a physical range: lo <= v <= hi (lo < v with open_lo)."""
+    def check(v):
+        ok = (v > lo if open_lo else v >= lo) and v <= hi
+        return None if ok else f"must be in {'(' if open_lo else '['}{lo:g}, {hi:g}]{unit}, got {v:g}"
+    return check
+
+
+length_mm = within(0.0, MAX_LENGTH_MM, open_lo=True, unit=" mm")
+
+
 def _coerce(value: Any, p: Param) -> Any:
     """Convert a TOML value to the declared kind, or return an error string."""
     if p.kind == "float":

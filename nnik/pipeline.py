@@ -438,6 +438,7 @@ def select(outdir: Path, progress: bool = True, families=None, target: dict | No
     from nnik import selection as sel
 
     problem = problem_for(outdir)
+    overrides = target
     target = {**problem.scn.target, **(target or {})}
     if target.get("max_error") != problem.scn.target.get("max_error"):
         target["max_error_source"] = "command line"
@@ -445,19 +446,25 @@ def select(outdir: Path, progress: bool = True, families=None, target: dict | No
     cands = sel.fit_ladder(problem, families, progress=(lambda **k: tqdm(leave=False, **k)) if progress else None,
                            max_error=target["max_error"])
     bests = sel.family_bests(cands, target)
-    reachable = any(c.meets(target["max_error"]) for c in cands)
-    if reachable:
-        c_dir = outdir / C_DIR
-        for c in tqdm(list(bests.values()), desc="verify family bests", unit="family", disable=not progress, leave=False):
-            sel.verify_candidate(c, c_dir / sel.ALT_DIR / c.family, (outdir / "targets" / "families").resolve())
-    pick = sel.choose(bests, target) if reachable else None
-    if reachable:
-        sel.write_choice(outdir / C_DIR, bests, pick)
+    # every family's best is verified and written to c/alt/, whether or not one meets the target
+    c_dir = outdir / C_DIR
+    for c in tqdm(list(bests.values()), desc="verify family bests", unit="family", disable=not progress, leave=False):
+        sel.verify_candidate(c, c_dir / sel.ALT_DIR / c.family, (outdir / "targets" / "families").resolve())
+    pick = sel.choose(bests, target)
+    asked = "max_error" in (problem.scn.raw.get("target") or {}) or "max_error" in (overrides or {})
+    if pick is None and not asked and bests:
+        # no [target] max_error: the default is a goal, not a reason to fail; the most accurate
+        # verified family best within the limits is flashed, and the summary says it missed
+        pick = sel.choose_most_accurate(bests, target)
+    if bests:
+        sel.write_choice(c_dir, bests, pick)
     section = {
         "target": target, "input_unit_um": problem.unit_um, "check_points": int(len(problem.check[0])),
         "check_set": ("grid + edge + random check inside the marks' hull, against the reference" if problem.reference
                       else "grid + edge + random check" if problem.analytic else "held-out rows"),
         "error_floor": problem.error_floor,
+        "max_error_asked": asked,  # false: the default max_error, which a pick may miss (it is then the most accurate)
+        "pick_meets_max_error": pick is not None and pick.meets(target["max_error"]),
         "implementations": [c.row(picked=c is pick) for c in bests.values()],
         "ladder": [c.row() for c in cands],
         "pick": None if pick is None else {"family": pick.family, "config": pick.config, "describe": pick.impl.describe(),
@@ -467,6 +474,6 @@ def select(outdir: Path, progress: bool = True, families=None, target: dict | No
     extra = {"reference": problem.reference.to_dict()} if problem.reference is not None else {}
     write_metrics(outdir, {"selection": section, "implementations": section["implementations"], **extra})
     if pick is None:
-        raise NnikError(sel.no_pick_reason(cands, bests, target), problem.scn.source, "[target]")
+        raise NnikError(sel.no_pick_reason(cands, bests, target, problem), problem.scn.source, "[target]")
     pick_state.seal(outdir, section)  # last: the pick, its metrics and hashes are all in place
     return section

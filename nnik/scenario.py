@@ -12,7 +12,7 @@ from nnik.actuator import Actuator
 from nnik.c_text import c_name_problem
 from nnik.errors import NnikError
 from nnik.kinematics import KINDS, Mechanism, Workspace
-from nnik.params import Param, positive, validate_table
+from nnik.params import MAX_LENGTH_MM, Param, positive, validate_table
 
 
 def _at_least(n):
@@ -49,7 +49,11 @@ TOP = {
     "export": Param("table", default={}),
     "target": Param("table", default={}),
 }
-WORKSPACE = {"x_mm": Param("range", required=True), "y_mm": Param("range", required=True)}
+def _extent(v):
+    return None if max(abs(v[0]), abs(v[1])) <= MAX_LENGTH_MM else f"must lie within +/-{MAX_LENGTH_MM:g} mm, got {list(v)}"
+
+
+WORKSPACE = {"x_mm": Param("range", required=True, check=_extent), "y_mm": Param("range", required=True, check=_extent)}
 DATASET = {
     "n_train": Param("int", default=1000, check=_between(10, MAX_POINTS)),
     "n_val": Param("int", default=0, check=_between(0, MAX_POINTS), doc="0 = n_train / 4 (at least 200)"),

@@ -11,12 +11,13 @@ from __future__ import annotations
 import dataclasses
 
 from nnik.implementations import Problem
-from nnik.implementations.lut import LutImpl, k_for_nodes
+from nnik.implementations.lut import LutImpl, cell_ladder, k_for_nodes, table_budget
+from nnik.implementations.lut_table import dependence
+from nnik.implementations.poly import MAX_DEGREE
 
 MLP_WIDTHS = (3, 4, 5, 6, 8, 10, 12)
 MLP_TANH = ("default", "lerp32", "lerp64", "lerp_mr", "lerp_mr4", "minimax3_x11", "minimax2_x22", "paper_lsq5")
 SPLITS = {"none": False, "x": [True, False], "y": [False, True], "both": True}
-MAX_NODES = 40  # table nodes per axis, as the ladders
 MIN_NODES = 3
 # a trial's MLP trains on a small budget so that it takes seconds (the scenario's own network keeps
 # the budget `nnik run` trained it with)
@@ -31,13 +32,20 @@ def fast_problem(problem: Problem) -> Problem:
     return problem
 
 
-def k_range(span: int) -> tuple[int, int]:
-    """Cell exponents from MAX_NODES nodes (smallest k) to MIN_NODES nodes (largest k) on `span`."""
+def k_range(span: int, max_nodes: int) -> tuple[int, int]:
+    """Cell exponents from `max_nodes` nodes (smallest k) to MIN_NODES nodes (largest k) on `span`."""
     k_hi = k_for_nodes(span, MIN_NODES)
     k_lo = k_hi
-    while k_lo > 0 and (span >> (k_lo - 1)) + 2 <= MAX_NODES:
+    while k_lo > 0 and (span >> (k_lo - 1)) + 2 <= max_nodes:
         k_lo -= 1
     return k_lo, k_hi
+
+
+def max_nodes(problem: Problem, span: list[int]) -> int:
+    """Nodes per axis the ladders reach on this problem: the finest cells of lut.cell_ladder, which
+    grows a table to the flash budget of the target and the chip (no fixed node cap)."""
+    ks = cell_ladder(span, table_budget(problem), dependence(problem, True))
+    return max(MIN_NODES, max((span[a] >> ks[-1][a]) + 2 for a in range(2))) if ks else MIN_NODES
 
 
 def spans(problem: Problem) -> dict[str, list[int]]:
@@ -56,15 +64,16 @@ def suggest(trial, problem: Problem, families: list[str]) -> tuple[str, dict]:
     p["mlp_mode"] = trial.suggest_categorical("mlp_mode", ["full", "residual"])
     p["mlp_tanh"] = trial.suggest_categorical("mlp_tanh", MLP_TANH)
     p["mlp_weight_bits"] = trial.suggest_categorical("mlp_weight_bits", [8, 16])
-    p["poly_degree"] = trial.suggest_int("poly_degree", 1, 7)
+    p["poly_degree"] = trial.suggest_int("poly_degree", 1, MAX_DEGREE)
     p["poly_coef_bits"] = trial.suggest_categorical("poly_coef_bits", [16, 32])
     p["poly_split"] = trial.suggest_categorical("poly_split", list(SPLITS))
     p["poly_lsb"] = trial.suggest_categorical("poly_lsb", [False, True])
     p["poly_rounding"] = trial.suggest_categorical("poly_rounding", [True, False])
     sp = spans(problem)
     for fam_ in ("lut", "hybrid"):
+        nodes = max_nodes(problem, sp[fam_])
         for a, ax in enumerate("xy"):
-            lo, hi = k_range(sp[fam_][a])
+            lo, hi = k_range(sp[fam_][a], nodes)
             p[f"{fam_}_k{ax}"] = trial.suggest_int(f"{fam_}_k{ax}", lo, hi)
         p[f"{fam_}_W"] = trial.suggest_categorical(f"{fam_}_W", [8, 16])
         p[f"{fam_}_fit"] = trial.suggest_categorical(f"{fam_}_fit", ["lsq", "minimax"])

@@ -17,6 +17,7 @@ from nnik.errors import NnikError
 from nnik.implementations import FAMILIES, Implementation, Problem
 from nnik.implementations.accuracy import accuracy
 from nnik.implementations.base import TARGETS
+from nnik.implementations.lut import CHIP_FLASH
 from nnik.implementations.verify import verify_host, verify_on_target
 
 ALT_DIR = "alt"
@@ -40,7 +41,6 @@ class Candidate:
 
     def meets(self, max_error: float) -> bool:
         return self.impl is not None and self.claimed_max <= max_error
-
 
     def row(self, picked: bool = False) -> dict:
         r = {"family": self.family, "config": self.config, "picked": picked}
@@ -77,10 +77,14 @@ def fit_ladder(problem: Problem, families=None, progress=None, max_error: float 
     quick = _quick_points(problem) if max_error is not None else None
     out: list[Candidate] = []
     met: dict[str, int] = {}
+    growth: dict[str, dict] = {}  # family -> {grown knob value: best error at it}
     for fam, cfg in jobs:
         c = Candidate(fam, cfg)
+        stalled = _stalled(FAMILIES[fam].grows_by, cfg, growth.get(fam, {}))
         if max_error is not None and met.get(fam, 0) >= ENOUGH:
             c.skipped = f"not fitted: {ENOUGH} cheaper configurations of the ladder already meet max_error"
+        elif stalled:
+            c.skipped = stalled
         else:
             try:
                 c.impl = FAMILIES[fam].fit(problem, cfg)
@@ -93,6 +97,10 @@ def fit_ladder(problem: Problem, families=None, progress=None, max_error: float 
                 c.impl, c.skipped = None, str(exc)
             if max_error is not None and c.meets(max_error):
                 met[fam] = met.get(fam, 0) + 1
+            knob = FAMILIES[fam].grows_by
+            if knob and c.impl is not None:
+                g = growth.setdefault(fam, {})
+                g[cfg[knob]] = min(g.get(cfg[knob], float("inf")), c.acc["pre_max"])
         out.append(c)
         if bar:
             bar.update(1)
@@ -106,6 +114,25 @@ def fit_ladder(problem: Problem, families=None, progress=None, max_error: float 
             if top.acc.get("points") != len(problem.check[0]):
                 top.acc = accuracy(top.impl)
     return out
+
+
+STALL_STEPS = 2  # a grown knob (a polynomial's degree) stops after this many values without gain
+STALL_GAIN = 0.9  # a value counts as a gain when it cuts the family's best error below this ratio
+
+
+def _stalled(knob: str | None, cfg: dict, seen: dict) -> str | None:
+    """Why a config is not fitted because its family's growth stopped paying, or None: the last
+    STALL_STEPS values of the grown knob below this config's did not cut the best error by 10 %."""
+    if not knob or cfg.get(knob) is None:
+        return None
+    below = sorted(v for v in seen if v < cfg[knob])
+    if len(below) <= STALL_STEPS:
+        return None
+    best_before = min(seen[v] for v in below[:-STALL_STEPS])
+    if min(seen[v] for v in below[-STALL_STEPS:]) > STALL_GAIN * best_before:
+        return (f"not fitted: {knob} {', '.join(map(str, below[-STALL_STEPS:]))} did not improve the fit "
+                f"(best {best_before:.3g} at a lower {knob})")
+    return None
 
 
 def _quick_points(problem: Problem):
@@ -169,15 +196,46 @@ def choose(bests: dict[str, Candidate], target: dict) -> Candidate | None:
     return min(ok, key=lambda c: (c.checks[chip]["cycles"], c.checks[chip]["flash_bytes"]))
 
 
-def no_pick_reason(cands: list[Candidate], bests: dict[str, Candidate], target: dict) -> str:
+def choose_most_accurate(bests: dict[str, Candidate], target: dict) -> Candidate | None:
+    """With no max_error asked for: the most accurate family best that is bit-exact everywhere it
+    ran and within the [target] cycle and flash limits, whether or not it meets the default."""
+    ok = [c for c in bests.values() if _eligible(c, {**target, "max_error": float("inf")})]
+    return min(ok, key=lambda c: c.acc["pre_max"]) if ok else None
+
+
+def reach_hint(fitted: list[Candidate], target: dict, problem: Problem | None) -> str:
+    """What would reach max_error, as far as the fitted ladder shows: the noise floor of a measured
+    machine, a bigger table (bilinear error falls as the cell area, so a table's bytes scale as
+    error / max_error), or the search."""
+    floor = problem.error_floor if problem is not None else 0.0
+    if floor >= target["max_error"]:
+        return (f"the reference model of the marks alone is off by about {floor:.3g} (noise and spacing of the "
+                f"marks): max_error must exceed it, or measure more marks")
+    tables = [c for c in fitted if c.family == "lut" and c.acc.get("pre_max", 0) > 0]
+    if tables:
+        t = min(tables, key=lambda c: c.acc["pre_max"])
+        need = t.impl.model_bytes() * (t.acc["pre_max"] - floor) / max(target["max_error"] - floor, 1e-12)
+        limit = target.get("max_flash_bytes")
+        chip_flash = CHIP_FLASH[target.get("chip", "avr")]
+        if limit and need > limit and need <= chip_flash:
+            return (f"a lut finer than {t.impl.describe()} would need about {need / 1024:.1f} KB of table: raise "
+                    f"[target] max_flash_bytes ({limit} B)")
+        if need > chip_flash:
+            return (f"a lut would need about {need / 1024:.0f} KB of table, more than the chip's flash; try "
+                    "`nnik search` or a larger max_error")
+    return "try `nnik search` over every family's knobs, or a larger max_error"
+
+
+def no_pick_reason(cands: list[Candidate], bests: dict[str, Candidate], target: dict,
+                   problem: Problem | None = None) -> str:
     fitted = [c for c in cands if c.impl is not None]
     if not fitted:
         return "no implementation family could be built: " + "; ".join(f"{c.family}: {c.skipped}" for c in cands)
     top = min(fitted, key=lambda c: c.acc["pre_max"])
     unit_err = f"{top.claimed_max:.4g}"
     if top.claimed_max > target["max_error"]:
-        return (f"no implementation meets max_error {target['max_error']:g}: the best reached {unit_err} "
-                f"({top.impl.describe()})")
+        return (f"no implementation meets max_error {target['max_error']:g}: the closest is {top.impl.describe()} "
+                f"at {unit_err}; {reach_hint(fitted, target, problem)} (every family's best is in c/alt/)")
     limits = {k: target[k] for k in ("max_cycles", "max_flash_bytes") if target.get(k)}
     meas = ", ".join(f"{c.family} {c.checks.get(target['chip'], {}).get('cycles', float('nan')):.0f} cycles / "
                      f"{c.checks.get(target['chip'], {}).get('flash_bytes', 0)} B"

@@ -74,7 +74,7 @@ def test_accuracy_is_measured_against_the_exact_ik(galvo_run):
 
 
 def test_unreachable_error_exits_with_the_best_reached(galvo_run):
-    with pytest.raises(NnikError, match=r"no implementation meets max_error 1e-09: the best reached [0-9.]+"):
+    with pytest.raises(NnikError, match=r"no implementation meets max_error 1e-09: the closest is mlp .* at [0-9.]+; try `nnik search`"):
         pipeline.select(galvo_run, progress=False, families=["mlp"], target={"max_error": 1e-9})
 
 
@@ -116,4 +116,4 @@ def test_select_command_names_the_best_error_when_nothing_meets(galvo_run, capsy
 
     rc = main(["select", str(galvo_run), "--family", "mlp", "--max-error", "1e-9"])
     err = capsys.readouterr().err.strip().splitlines()
-    assert rc == 2 and len(err) == 1 and "the best reached" in err[0]
+    assert rc == 2 and len(err) == 1 and "the closest is mlp" in err[0] and "c/alt/" in err[0]

@@ -53,6 +53,9 @@ class Implementation(ABC):
     # verified on every chip)
     front_checked_on: ClassVar[tuple[str, ...]] = TARGETS
     front_not_checked_reason: ClassVar[str] = ""
+    # a config knob the ladder grows (e.g. a polynomial's degree): selection.fit_ladder stops a
+    # family's ladder once STALL_STEPS values of it in a row no longer improve the family's error
+    grows_by: ClassVar[str | None] = None
 
     def __init__(self, problem: Problem, config: dict):
         self.problem = problem

@@ -28,8 +28,8 @@ import numpy as np
 
 from nnik.errors import NnikError
 from nnik.implementations.c_common import i32
-from nnik.implementations.lut import LutImpl, cell_exponents, cell_ladder, folded_data, table_for
-from nnik.implementations.lut_table import Table, base_terms
+from nnik.implementations.lut import LutImpl, cell_exponents, cell_ladder, folded_data, table_budget, table_for
+from nnik.implementations.lut_table import Table, base_terms, dependence
 from nnik.implementations.problem import Problem
 
 DEFAULTS = {"bits": 16, "W": 16, "fit": "lsq", "base": "affine", "coef_bits": 16, "symmetry": True,
@@ -60,12 +60,13 @@ class HybridImpl(LutImpl):
 
     @classmethod
     def ladder(cls, problem: Problem) -> list[dict]:
-        """Residual tables with cells halving from about 4 to at most 40 nodes per stored axis:
+        """Residual tables with cells halving from about 4 nodes per stored axis while they fit the
+        flash budget (lut.table_budget):
         an 8-bit cell fraction with 8-bit base slopes (fastest) and Q16 with 16-bit slopes
         (minimax nodes up to 14 per axis)."""
         span = cls.stored_span(problem)
         out = []
-        for k in cell_ladder(span):
+        for k in cell_ladder(span, table_budget(problem), dependence(problem, True)):
             # minimax only on exact samples of small tables (on measured rows it fits the noise)
             small = problem.analytic and max((span[a] >> k[a]) + 2 for a in range(2)) <= 14
             out += [{"k": k, "bits": 16, "W": 8, "fit": "lsq", "base": "affine", "coef_bits": 8},

@@ -24,7 +24,7 @@ from nnik.errors import NnikError
 from nnik.implementations.base import Implementation, IntRun
 from nnik.implementations.c_common import comment_safe, i32
 from nnik.implementations.lut_c import table_ctx
-from nnik.implementations.lut_table import Grid, Table, dependence, fit_nodes, fold_plan, quantise
+from nnik.implementations.lut_table import MAX_NODES, Grid, Table, dependence, fit_nodes, fold_plan, quantise
 from nnik.implementations.problem import Problem
 
 DEFAULTS = {"bits": 16, "W": 16, "fit": "lsq", "symmetry": True, "separable": True}
@@ -111,16 +111,36 @@ def cell_exponents(cfg: dict) -> list[int]:
     return [int(v) for v in k]
 
 
-def cell_ladder(span: list[int], first_nodes: int = 4, max_nodes: int = 40) -> list[list[int]]:
-    """Cell exponents per axis, halving the cells from about `first_nodes` nodes per axis while
-    no axis exceeds `max_nodes` nodes."""
+CHIP_FLASH = {"avr": 32 * 1024, "pic18": 32 * 1024}  # ATmega328P, PIC18F452
+TABLE_FLASH_SHARE = 2  # with no [target] max_flash_bytes, a table may take 1/2 of the chip's flash:
+# the rest is the firmware's (nnik's G-code firmware takes about 15 KB on the Uno)
+
+
+def table_budget(problem: Problem) -> int:
+    """Flash bytes a table may take: [target] max_flash_bytes, else half the chip's flash."""
+    tg = problem.scn.target
+    return int(tg.get("max_flash_bytes") or CHIP_FLASH[tg.get("chip", "avr")] // TABLE_FLASH_SHARE)
+
+
+def table_entries(span: list[int], k: list[int], dep=("xy", "xy")) -> int:
+    """Entries of a two-output table with cells 2^k over the stored span (1-D outputs store one row)."""
+    n = [(span[a] >> k[a]) + 2 for a in range(2)]
+    return sum(n[0] * n[1] if d == "xy" else n["xy".index(d)] for d in dep)
+
+
+def cell_ladder(span: list[int], budget_bytes: int, dep=("xy", "xy"), first_nodes: int = 4) -> list[list[int]]:
+    """Cell exponents per axis, halving the cells from about `first_nodes` nodes per axis while an
+    int16 table of that size fits `budget_bytes` (and the one-byte cell index). The target and the
+    chip decide how far a ladder grows, not a node count tuned to a scenario."""
     k0 = [k_for_nodes(s, first_nodes) for s in span]
     out = []
-    for step in range(12):
+    for step in range(24):
         k = [max(0, k0[a] - step) for a in range(2)]
-        if max((span[a] >> k[a]) + 2 for a in range(2)) > max_nodes:
+        if max((span[a] >> k[a]) + 2 for a in range(2)) > MAX_NODES or 2 * table_entries(span, k, dep) > budget_bytes:
             break
         out.append(k)
+        if k == [0, 0]:
+            break
     return out
 
 
@@ -135,24 +155,28 @@ class LutImpl(Implementation):
     # ---- fitting -------------------------------------------------------------------------------
     @classmethod
     def ladder(cls, problem: Problem) -> list[dict]:
-        """Cells halving from about 4 nodes per stored axis up to 40 nodes; per size an int16
+        """Cells halving from about 4 nodes per stored axis while the table fits the flash budget
+        (:func:`table_budget`); per size an int16
         table with an 8-bit cell fraction (fastest), a Q16 int16 table (minimax nodes up to 14
         per axis) and a Q16 int32 table (wide outputs, DACs)."""
         span = cls.stored_span(problem)
+        budget, dep = table_budget(problem), dependence(problem, True)
         out = []
-        for k in cell_ladder(span):
+        for k in cell_ladder(span, budget, dep):
             # minimax only on exact samples of small tables (on measured rows it fits the noise)
             small = problem.analytic and max((span[a] >> k[a]) + 2 for a in range(2)) <= 14
             out += [{"k": k, "bits": 16, "W": 8, "fit": "lsq", "symmetry": True},
-                    {"k": k, "bits": 16, "W": 16, "fit": "minimax" if small else "lsq", "symmetry": True},
-                    {"k": k, "bits": 32, "W": 16, "fit": "lsq", "symmetry": True}]
+                    {"k": k, "bits": 16, "W": 16, "fit": "minimax" if small else "lsq", "symmetry": True}]
+            if 4 * table_entries(span, k, dep) <= budget:
+                out.append({"k": k, "bits": 32, "W": 16, "fit": "lsq", "symmetry": True})
         return out
 
     @staticmethod
     def stored_span(problem: Problem, symmetry: bool = True) -> list[int]:
         """Span of the stored table per axis (after the symmetry folds), input units."""
         fold, _ = fold_plan(problem, symmetry)
-        return [int(problem.hi[a]) if fold[a] else int(problem.hi[a] - problem.lo[a]) for a in range(2)]
+        return [max(int(problem.hi[a]), -int(problem.lo[a])) if fold[a] else int(problem.hi[a] - problem.lo[a])
+                for a in range(2)]
 
     @classmethod
     def fit(cls, problem: Problem, config: dict) -> "LutImpl":

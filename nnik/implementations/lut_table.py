@@ -38,18 +38,18 @@ def _truth_or_none(problem, pts):
 
 def detect_parity(problem, n: int = 4000, seed: int = 7) -> list[list[str | None]]:
     """[output][axis] -> "even", "odd" or None, checked numerically on the exact IK at mirrored
-    integer points; only for an axis whose domain is symmetric about 0 (lo == -hi). Measured
-    data has no symmetry."""
+    integer points of the problem's parity box (the symmetric hull of a field that straddles 0,
+    see Problem.parity_box). Measured data has no symmetry."""
     res = [[None, None] for _ in range(2)]
     if not problem.analytic:
         return res
-    lo, hi = problem.lo, problem.hi
+    lo, hi, mirror = problem.parity_box
     rng = np.random.default_rng(seed)
     pts = rng.integers(lo, hi + 1, (n, 2))
     q = problem.truth(pts)
     tol = 1e-7 * (1.0 + np.ptp(q, axis=0))
     for a in range(2):
-        if lo[a] != -hi[a]:
+        if not mirror[a]:
             continue
         m = pts.copy()
         m[:, a] = -m[:, a]
@@ -156,9 +156,9 @@ class Grid:
     def make(cls, lo, hi, k, fold, W) -> "Grid":
         origin, span, n = [], [], []
         for a in range(2):
-            if fold[a]:
+            if fold[a]:  # t = |x|: the stored half reaches the farther edge
                 origin.append(0)
-                span.append(int(hi[a]))
+                span.append(max(int(hi[a]), -int(lo[a])))
             else:
                 origin.append(int(lo[a]))
                 span.append(int(hi[a] - lo[a]))

@@ -34,7 +34,7 @@ from nnik.implementations.problem import Problem
 from nnik.implementations import poly_fit, poly_int
 
 DEFAULTS = {"degree": 5, "fit": "best", "coef_bits": 16, "split": False, "trim": 4, "rounding": True, "lsb": False}
-LADDER_MAX_TERMS = 15  # beyond this the Horner chains cost more than any goal allows
+MAX_DEGREE = 9  # what fit() accepts; the ladder stops earlier once a degree no longer improves the fit
 CONST_TOL = 1e-3  # output units: a final constant multiplier rounded worse than this gets a low part
 NEGLIGIBLE = 1e-6  # output units: a term smaller than this over the domain is dropped
 KNOBS = set(DEFAULTS) | {"degree_x", "degree_y", "guard"}
@@ -67,11 +67,13 @@ def _symmetry(p: Problem) -> list:
 class PolyImpl(Implementation):
     family = "poly"
     doc = "bivariate polynomial per output, symmetric terms only, Horner in int16 on the hardware multiplier"
+    grows_by = "degree"
 
     @classmethod
     def ladder(cls, problem: Problem) -> list[dict]:
-        """Total degree 1..7 (a degree whose symmetric term sets equal the previous one's, or with
-        more than LADDER_MAX_TERMS terms in an output, is skipped); per degree, without and with the dropped-input-bits correction (when an input
+        """Total degree 1..MAX_DEGREE (a degree whose symmetric term sets equal the previous one's is
+        skipped; selection.fit_ladder stops growing the degree once the fit stops improving, see
+        ``grows_by``); per degree, without and with the dropped-input-bits correction (when an input
         shift drops bits); no split, the split of each output, of both; from degree 3 each also
         with floor steps (3 AVR cycles a step cheaper). The fit is chosen per output ("best")."""
         sym = _symmetry(problem)
@@ -79,9 +81,9 @@ class PolyImpl(Implementation):
         lsbs = (False, True) if any(m.k > 0 for m in maps) else (False,)
         splits = [False, [True, False], [False, True], True]
         out, seen = [], set()
-        for d in range(1, 8):
+        for d in range(1, MAX_DEGREE + 1):
             terms = tuple(tuple(poly_fit.monomials(s, d)) for s in sym)
-            if terms in seen or max(len(t) for t in terms) > LADDER_MAX_TERMS:
+            if terms in seen:
                 continue
             seen.add(terms)
             for lsb in lsbs:
@@ -98,8 +100,8 @@ class PolyImpl(Implementation):
             raise NnikError(f"poly: unknown knob(s) {', '.join(sorted(unknown))}")
         cfg = {**DEFAULTS, **config}
         deg = cfg["degree"]
-        if not isinstance(deg, int) or not 1 <= deg <= 9:
-            raise NnikError(f"poly: degree must be an integer in 1..9, got {deg!r}")
+        if not isinstance(deg, int) or not 1 <= deg <= MAX_DEGREE:
+            raise NnikError(f"poly: degree must be an integer in 1..{MAX_DEGREE}, got {deg!r}")
         if cfg["coef_bits"] not in (16, 32):
             raise NnikError(f"poly: coef_bits must be 16 or 32, got {cfg['coef_bits']!r}")
         split = cfg["split"]

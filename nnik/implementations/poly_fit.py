@@ -43,9 +43,10 @@ class AxisMap:
 
 def axis_maps(p: Problem) -> list[AxisMap]:
     maps = []
+    mirror = p.parity_box[2]
     for a in range(2):
         lo, hi = int(p.lo[a]), int(p.hi[a])
-        c = 0 if lo == -hi else (lo + hi) // 2
+        c = 0 if mirror[a] else (lo + hi) // 2  # centred on 0 where the IK's parity is tested
         dmax = max(hi - c, c - lo, 1)
         k = 0
         while dmax > 32767 * 2**k:
@@ -113,12 +114,12 @@ def detect_symmetry(p: Problem, n: int = 4096, seed: int = 7) -> list[Symmetry]:
     """Per output, from the truth at n random in-domain points and their mirror images."""
     if not p.analytic:
         return [NO_SYMMETRY, NO_SYMMETRY]
-    lo, hi = p.lo, p.hi
+    lo, hi, mirror = p.parity_box  # the symmetric hull of the field: parity belongs to the IK
     rng = np.random.default_rng(seed)
     pts = rng.integers(lo, hi + 1, (n, 2))
     f = p.truth(pts)
     tol = SYM_TOL * (np.ptp(f, axis=0) + 1.0)
-    sym = [bool(lo[a] == -hi[a]) for a in range(2)]
+    sym = list(mirror)
     # independence of x (y): the truth does not change when x (y) is redrawn
     indep = []
     for a in range(2):

@@ -188,3 +188,28 @@ class Problem:
         if self.code_range is not None:
             out = np.clip(out, *self.code_range)
         return out
+
+    @cached_property
+    def parity_box(self) -> tuple[np.ndarray, np.ndarray, tuple[bool, bool]]:
+        """(lo, hi, mirror) int64 per axis: where a family tests the IK's parity in each input.
+
+        Symmetry is a property of the IK, not of the field: on an axis whose domain straddles 0,
+        an exact (analytic) IK is tested over the symmetric hull [-M, M], M = max(-lo, hi), so an
+        asymmetric field of a gimbal still gets its odd/even outputs. ``mirror[a]`` says the box
+        is symmetric about 0 on axis a. Where the IK is not finite on the hull (a singularity
+        outside the field), and for measured machines, the box is the domain itself."""
+        lo, hi = self.lo.copy(), self.hi.copy()
+        if self.scn.mechanism.analytic:
+            straddle = (lo < 0) & (hi > 0)
+            m = np.maximum(-lo, hi)
+            blo, bhi = np.where(straddle, -m, lo), np.where(straddle, m, hi)
+            probe = np.random.default_rng(5).integers(blo, bhi + 1, (4096, 2))
+            probe = np.concatenate([probe, np.stack(np.meshgrid([blo[0], bhi[0]], [blo[1], bhi[1]]), -1).reshape(-1, 2)])
+            with np.errstate(all="ignore"):
+                try:
+                    ok = bool(np.all(np.isfinite(self.truth(probe))))
+                except (NnikError, ValueError, ArithmeticError):
+                    ok = False
+            if ok:
+                lo, hi = blo, bhi
+        return lo, hi, (bool(lo[0] == -hi[0]), bool(lo[1] == -hi[1]))

@@ -23,16 +23,16 @@ import numpy as np
 
 from nnik.errors import NnikError
 from nnik.kinematics.base import Mechanism, as_points
-from nnik.params import Param, positive, validate_table
+from nnik.params import Param, length_mm, validate_table, within
 
 DISTORTION = {
-    "A_deg": Param("float", default=90.0, doc="direction of the Y axis (nominal 90)"),
-    "B_deg": Param("float", default=0.0, doc="direction of the X axis (nominal 0)"),
-    "bow_mm": Param("float", default=0.0, doc="quadratic sag of the X rail at mid-span"),
-    "stretch": Param("float", default=0.0, doc="relative X-scale change from mid-Y to the Y edge"),
-    "racking_deg": Param("float", default=0.0, doc="gantry yaw at the Y edge (linear in Y)"),
-    "eccentricity_mm": Param("float", default=0.0, doc="pulley eccentricity (belt pay-out error)"),
-    "eccentricity_phase_deg": Param("float", default=0.0, doc="phase of the eccentricity"),
+    "A_deg": Param("float", default=90.0, check=within(0.0, 180.0, open_lo=True, unit=" deg"), doc="direction of the Y axis (nominal 90)"),
+    "B_deg": Param("float", default=0.0, check=within(-90.0, 90.0, unit=" deg"), doc="direction of the X axis (nominal 0)"),
+    "bow_mm": Param("float", default=0.0, check=within(-1000.0, 1000.0, unit=" mm"), doc="quadratic sag of the X rail at mid-span"),
+    "stretch": Param("float", default=0.0, check=within(-0.5, 0.5), doc="relative X-scale change from mid-Y to the Y edge"),
+    "racking_deg": Param("float", default=0.0, check=within(-45.0, 45.0, unit=" deg"), doc="gantry yaw at the Y edge (linear in Y)"),
+    "eccentricity_mm": Param("float", default=0.0, check=within(-100.0, 100.0, unit=" mm"), doc="pulley eccentricity (belt pay-out error)"),
+    "eccentricity_phase_deg": Param("float", default=0.0, check=within(-360.0, 360.0, unit=" deg"), doc="phase of the eccentricity"),
 }
 NONLINEAR_KEYS = ("bow_mm", "stretch", "racking_deg", "eccentricity_mm")
 
@@ -44,8 +44,8 @@ NEWTON_MAX_ITER = 40
 class BeltMechanism(Mechanism):
     family = "belt"
     BELT_PARAMS = {
-        "R1_mm": Param("float", check=positive, doc="pulley radius, motor 1 (default mm_per_rev/2pi)"),
-        "R2_mm": Param("float", check=positive, doc="pulley radius, motor 2 (default mm_per_rev/2pi)"),
+        "R1_mm": Param("float", check=length_mm, doc="pulley radius, motor 1 (default mm_per_rev/2pi)"),
+        "R2_mm": Param("float", check=length_mm, doc="pulley radius, motor 2 (default mm_per_rev/2pi)"),
         "distortion": Param("table", default=None, doc="axis skew and nonlinear errors"),
     }
 

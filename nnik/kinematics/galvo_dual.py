@@ -12,7 +12,7 @@ import numpy as np
 
 from nnik.kinematics.base import Mechanism, as_points
 from nnik.kinematics.galvo_gimbal import MAX_MECH, check_incidence
-from nnik.params import Param, non_negative, positive
+from nnik.params import MAX_LENGTH_MM, Param, length_mm, within
 
 
 class GalvoDual(Mechanism):
@@ -20,8 +20,8 @@ class GalvoDual(Mechanism):
     family = "galvo"
     joint_names = ("theta_x", "theta_y")
     PARAMS = {
-        "e_mm": Param("float", required=True, check=non_negative, doc="mirror X to mirror Y"),
-        "d_mm": Param("float", required=True, check=positive, doc="mirror Y to target plane"),
+        "e_mm": Param("float", required=True, check=within(0.0, MAX_LENGTH_MM, unit=" mm"), doc="mirror X to mirror Y"),
+        "d_mm": Param("float", required=True, check=length_mm, doc="mirror Y to target plane"),
         "max_mech_deg": MAX_MECH,
     }
 

@@ -13,7 +13,7 @@ import numpy as np
 
 from nnik.errors import NnikError
 from nnik.kinematics.base import Mechanism, as_points
-from nnik.params import Param, positive
+from nnik.params import Param, length_mm
 
 
 def _mech_limit(v):
@@ -47,7 +47,7 @@ class GalvoGimbal(Mechanism):
     family = "galvo"
     joint_names = ("alpha", "beta")
     PARAMS = {
-        "z_mm": Param("float", required=True, check=positive, doc="mirror centre to target plane"),
+        "z_mm": Param("float", required=True, check=length_mm, doc="mirror centre to target plane"),
         "max_mech_deg": MAX_MECH,
     }
 

@@ -9,14 +9,14 @@ from __future__ import annotations
 import numpy as np
 
 from nnik.kinematics.belt import BeltMechanism
-from nnik.params import Param, positive
+from nnik.params import Param, length_mm
 
 
 class HBot(BeltMechanism):
     kind = "hbot"
     PARAMS = {
-        "X_mm": Param("float", required=True, check=positive, doc="frame span"),
-        "C_mm": Param("float", required=True, check=positive, doc="carriage width"),
+        "X_mm": Param("float", required=True, check=length_mm, doc="frame span"),
+        "C_mm": Param("float", required=True, check=length_mm, doc="carriage width"),
         **BeltMechanism.BELT_PARAMS,
     }
 

@@ -14,6 +14,7 @@ from nnik.errors import NnikError
 from nnik.implementations import FAMILIES
 from nnik.implementations.accuracy import accuracy
 from nnik.implementations.poly import PolyImpl
+from nnik.implementations import poly_fit
 from nnik.implementations.poly_fit import NO_SYMMETRY, detect_symmetry
 from nnik.implementations.verify import verify_host, verify_on_target
 
@@ -35,14 +36,25 @@ def test_symmetry_found_in_the_galvo_truth():
     assert [s.label() for s in dual] == ["odd in x, even in y", "independent of x, odd in y"]
 
 
-def test_no_parity_about_a_point_that_is_not_the_domain_centre(tmp_path):
-    # the gimbal with x in [-50, 150] mm: the IK is still odd in x about x = 0, but x = 0 is not
-    # the domain's centre, so no parity in x may be used; y keeps its parity
+def test_parity_about_zero_holds_on_an_off_centre_field(tmp_path):
+    # the gimbal with x in [-50, 150] mm: the IK is odd in x about x = 0 whatever the field (issue
+    # 15), so the parity is tested on the field's symmetric hull and the polynomial is centred on 0
     text = (DATASETS / "galvo_cba2012.toml").read_text().replace("x_mm = [-100.0, 100.0]", "x_mm = [-50.0, 150.0]")
     p = problem_from(write_toml(tmp_path, text))
     sym = detect_symmetry(p)
-    assert sym[1].label() == "even in y"
+    assert sym[1].label() == "odd in x, even in y"
     assert sym[0].label() == "independent of x, odd in y"
+    assert poly_fit.axis_maps(p)[0].c == 0
+    im = PolyImpl.fit(p, {"degree": 3})
+    assert all(i % 2 == 1 for i, _ in im.coefs[1][1])  # only odd powers of u
+    assert accuracy(im)["pre_max"] < accuracy(PolyImpl.fit(p, {"degree": 1}))["pre_max"]
+
+
+def test_no_parity_where_the_ik_has_none_on_the_hull(tmp_path):
+    # off zero on x: no mirror image inside any hull, so no parity in x
+    text = (DATASETS / "galvo_cba2012.toml").read_text().replace("x_mm = [-100.0, 100.0]", "x_mm = [20.0, 150.0]")
+    p = problem_from(write_toml(tmp_path, text))
+    assert detect_symmetry(p)[1].label() == "even in y"
     im = PolyImpl.fit(p, {"degree": 3})
     assert any(i % 2 == 0 and i > 0 for i, _ in im.coefs[1][1])  # even powers of u are kept
 
