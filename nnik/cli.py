@@ -442,6 +442,9 @@ def cmd_job(args) -> None:
 
     if Path(args.scenario).is_dir():
         out = Path(args.scenario)
+        if args.outdir and Path(args.outdir).resolve() != out.resolve():
+            raise NnikError("-o picks the model directory of a scenario TOML; the first argument is already a model "
+                            "directory, so give one or the other", args.outdir, "-o")
     else:
         from nnik.scenario import load_scenario
 
@@ -462,6 +465,9 @@ def cmd_job(args) -> None:
     chip = res["chip"]
     if "not_run" not in chip:
         console.print(f"self-test on simavr: {chip['selftest']}")
+        if chip.get("end_s") is not None:
+            console.print(f"simulated chip: {chip['segments_started']} segments, idle at {chip['end_s']:.3f} s "
+                          f"({chip['motion_s']:.3f} s of motion; the model's {res['seconds']:.3f} s)")
         if not (chip["steps_equal"] and chip["replies_equal"] and chip["selftest_pass"]):
             raise NnikError("the simulated chip's steps or answers differ from the Python model", res["job"])
     console.print(f"plot: {res['png']}; figures: {Path(res['png']).with_suffix('.json')}")
@@ -553,7 +559,8 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("job", help="run a G-code job through the firmware logic (Python and simulated Uno)")
     p.add_argument("scenario", help="scenario TOML (its build directory) or a model directory")
     p.add_argument("job", help="G-code file")
-    p.add_argument("-o", "--outdir", help="model directory (default build/<name>/)")
+    p.add_argument("-o", "--outdir", help="model directory of the scenario TOML (default build/<name>/); "
+                   "an error with a model directory as the first argument")
     p.add_argument("--seg-um", type=int, help="longest segment in um (default 500)")
     p.add_argument("--no-chip", action="store_true", help="Python model only, no simavr run")
     p.set_defaults(func=cmd_job)

@@ -68,8 +68,9 @@ def chip_run(outdir: Path, lines: list[str], cfg: MachineConfig, seconds: float,
 
 
 def motion_times(run) -> dict:
-    """When the chip's motion ended (the machine fell idle after the whole job) and how long it
-    ran from the first segment's start, in seconds of simulated time (None: it never fell idle)."""
+    """When the chip's motion ended (its last tick: the machine fell idle after the whole job) and
+    how long it ran from the first segment's first tick, in seconds of simulated time (None: no
+    motion). Without stalls, motion_s is the model's seconds less one tick."""
     if not run.idle_cycle:
         return {"end_s": None, "motion_s": None}
     first = int(run.marks[0]) if len(run.marks) else run.idle_cycle
