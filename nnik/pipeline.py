@@ -312,7 +312,7 @@ def estimate_row(im, target: str, measured: dict | None = None) -> dict:
     from nnik.estimate import estimate
 
     e = estimate(im, target)
-    row = {k: e[k] for k in ("cycles", "flash_bytes", "ram_bytes", "profile", "validated") if k in e}
+    row = {k: e[k] for k in ("cycles", "flash_bytes", "ram_bytes", "profile", "validated", "cycles_error_pct") if k in e}
     if measured:
         row["cycles_error_pct"] = 100 * (e["cycles"] - measured["cycles"]) / measured["cycles"]
         row["flash_error_pct"] = 100 * (e["flash_bytes"] - measured["flash_bytes"]) / max(measured["flash_bytes"], 1)

@@ -1,4 +1,4 @@
-"""Command line: python3 -m nnik.estimate {calibrate,sweep,model}."""
+"""Command line: python3 -m nnik.estimate {calibrate,sweep,search-check,model}."""
 
 from __future__ import annotations
 
@@ -31,6 +31,12 @@ def main(argv: list[str] | None = None) -> int:
                    "'' = the kernel's own table)")
     s.add_argument("--profile", action="append", help="only these profiles")
     s.add_argument("--arch", action="append", help="hidden sizes, e.g. 8 or 8,8 (repeatable; default: the sweep set)")
+    k = sub.add_parser("search-check", help="random MLPs of the search space (fast kernel): predicted vs measured")
+    k.add_argument("-n", type=int, default=12, help="architectures to draw (default 12)")
+    k.add_argument("--seed", type=int, default=19)
+    k.add_argument("--depth", type=int, action="append", choices=(1, 2), help="hidden layers to draw (default 1 and 2)")
+    k.add_argument("--profile", action="append", help="profiles (default: avr-gcc-Os, pic18-sdcc)")
+    k.add_argument("--record", action="store_true", help="store each profile's stated error in its calibration file")
     m = sub.add_parser("model", help="estimate a trained model (OUTDIR or model.pt)")
     m.add_argument("model", type=Path)
     m.add_argument("--target", choices=TARGETS, default="avr")
@@ -53,6 +59,12 @@ def main(argv: list[str] | None = None) -> int:
             rows = sweep(tuple(args.target or TARGETS), archs=archs, record=args.record, kernel=args.kernel,
                          tanhs=tuple(args.tanh) if args.tanh else SWEEP_TANH, profiles_=args.profile)
             print(format_sweep(rows))
+        elif args.cmd == "search-check":
+            from nnik.estimate import search_check as sc
+
+            specs = sc.draw_specs(args.n, args.seed, tuple(args.depth or (1, 2)))
+            rows = sc.check(specs, args.profile or ["avr-gcc-Os", "pic18-sdcc"])
+            print(json.dumps(sc.record(rows, args.seed) if args.record else rows, indent=1))
         else:
             im = load_integer_model(args.model, tanh=args.tanh, kernel=args.kernel)
             est = estimate(im, args.target, args.profile, args.clock_hz)
