@@ -27,16 +27,16 @@ test: setup toolchains
 
 # per-target tables (MLP kernels, float math.h IK, LUT, seed 000 Table 1), then the estimator's
 # validation sweep (predicted vs measured cycles and flash on 11 architectures x 2 tanh); the measured
-# machines' claimed accuracy against a known truth (nnik.bench_measured), and
+# machines' claimed accuracy against a known truth (nnik.bench.measured), and
 # 300 random G-code jobs per machine on the simulated Uno against the Python model (CI runs 10)
 bench: setup toolchains
-	$(PYTHON) -m nnik.bench $(SCENARIO)
-	$(PYTHON) -m nnik.bench_families
-	$(PYTHON) -m nnik.bench_measured --sweep 8
-	$(PYTHON) -m nnik.search_bench
+	$(PYTHON) -m nnik.bench.mlp $(SCENARIO)
+	$(PYTHON) -m nnik.bench.families
+	$(PYTHON) -m nnik.bench.measured --sweep 8
+	$(PYTHON) -m nnik.bench.search
 	$(PYTHON) -m nnik.estimate sweep
 	$(PYTHON) -m nnik.estimate sweep --kernel fast --tanh '' --arch 4 --arch 6 --arch 8 --arch 10 --arch 12 --arch 16
-	NNIK_HYPOTHESIS_EXAMPLES=300 $(PYTHON) -m pytest -q tests/gcode/test_gcode_hypothesis.py
+	NNIK_HYPOTHESIS_EXAMPLES=300 $(PYTHON) -m pytest -q tests/firmware/gcode/test_gcode_hypothesis.py
 
 clean:
 	rm -rf build $(STAMP)

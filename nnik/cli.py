@@ -13,7 +13,7 @@ from rich.table import Table
 
 from nnik import pipeline
 from nnik.errors import NnikError
-from nnik.outdir import check_model_dir, check_outdir, release_locks
+from nnik.files.outdir import check_model_dir, check_outdir, release_locks
 
 console = Console(highlight=False, width=None if sys.stdout.isatty() else 140)
 
@@ -147,7 +147,7 @@ def _warn_training(model) -> None:
 
 
 def cmd_run(args) -> None:
-    from nnik.scenario import load_scenario
+    from nnik.machine.scenario import load_scenario
 
     t0 = time.perf_counter()
     scn = load_scenario(args.scenario)
@@ -199,7 +199,7 @@ def print_front(res: dict, unit: str) -> None:
 
 
 def _search_and_print(out: Path, trials: int, args=None) -> None:
-    from nnik import search
+    from nnik.search import study as search
 
     kw = {} if args is None else {"url": args.storage, "name": args.study, "jobs": args.jobs,
                                   "families": args.families.split(",") if args.families else None,
@@ -223,13 +223,13 @@ def _search_and_print(out: Path, trials: int, args=None) -> None:
 
 
 def cmd_search(args) -> None:
-    from nnik import search
+    from nnik.search import study as search
 
     src = Path(args.target)
     if src.is_dir():
         out = check_model_dir(src, pipeline.C_DIR)
     else:
-        from nnik.scenario import load_scenario
+        from nnik.machine.scenario import load_scenario
 
         scn = load_scenario(src)
         args.no_normalize = False
@@ -265,7 +265,7 @@ def _trained_for(scn, out: Path) -> bool:
 
 
 def cmd_generate(args) -> None:
-    from nnik.scenario import load_scenario
+    from nnik.machine.scenario import load_scenario
 
     scn = load_scenario(args.scenario)
     out = _outdir(args, scn, create=True)
@@ -274,7 +274,7 @@ def cmd_generate(args) -> None:
 
 
 def cmd_train(args) -> None:
-    from nnik.scenario import load_scenario
+    from nnik.machine.scenario import load_scenario
 
     scn = load_scenario(args.scenario)
     out = _outdir(args, scn)
@@ -302,7 +302,7 @@ def _evaluated_dir(model_dir) -> Path:
 def cmd_export(args) -> None:
     out = _evaluated_dir(args.model_dir)
     if getattr(args, "arduino", None):
-        from nnik.pick_state import require_deliverable
+        from nnik.files.pick_state import require_deliverable
 
         # the library is firmware: only a finished pick whose c/NAME.c is the verified C (refused
         # before anything is written; the MLP is never delivered in its place)
@@ -310,7 +310,7 @@ def cmd_export(args) -> None:
     im, _ = pipeline.export(out)
     console.print(f"wrote {out / pipeline.C_DIR}/{im.name}.h and {im.name}.c ({im.weights_bytes()} bytes of tables)")
     if getattr(args, "arduino", None):
-        from nnik.arduino_export import export_arduino
+        from nnik.firmware.arduino import export_arduino
 
         lib = export_arduino(out, Path(args.arduino))
         console.print(f"wrote Arduino library {lib['libname']} to {lib['dir']}/ (examples {lib['name']}_selftest with "
@@ -344,7 +344,7 @@ def cmd_verify(args) -> None:
         if lut.get("bit_exact") is False:
             raise NnikError(f"{args.target}: the LUT baseline's C differs from its integer model in {lut['mismatches']} calls")
         return
-    from nnik import pick_verify
+    from nnik.files import pick_verify
 
     name = pipeline.load_metrics(out)["name"]
     if args.family:
@@ -387,7 +387,7 @@ def cmd_estimate(args) -> None:
 
 
 def cmd_tanh(args) -> None:
-    from nnik import activations
+    from nnik.implementations.mlp import tanh as activations
 
     rows = activations.variants_table()
     t = Table(title="tanh replacements: int16 Q3.12 in, Q15 out, all 65536 inputs swept (errors in LSB of Q15)")
@@ -425,8 +425,8 @@ def cmd_report(args) -> None:
 
 
 def cmd_synth_csv(args) -> None:
-    from nnik.scenario import load_scenario
-    from nnik.synth import synthesize_measurements
+    from nnik.machine.scenario import load_scenario
+    from nnik.machine.synth import synthesize_measurements
 
     scn = load_scenario(args.scenario)
     n = synthesize_measurements(scn, Path(args.output), args.n, args.noise_um, args.seed, readings=args.readings,
@@ -437,8 +437,8 @@ def cmd_synth_csv(args) -> None:
 
 
 def cmd_job(args) -> None:
-    from nnik.gcode.job import run_job
-    from nnik.gcode.summary import JOB_HEADER, job_row
+    from nnik.firmware.gcode.job import run_job
+    from nnik.firmware.gcode.summary import JOB_HEADER, job_row
 
     if Path(args.scenario).is_dir():
         out = Path(args.scenario)
@@ -446,13 +446,13 @@ def cmd_job(args) -> None:
             raise NnikError("-o picks the model directory of a scenario TOML; the first argument is already a model "
                             "directory, so give one or the other", args.outdir, "-o")
     else:
-        from nnik.scenario import load_scenario
+        from nnik.machine.scenario import load_scenario
 
         scn = load_scenario(args.scenario)
         out = Path(args.outdir) if args.outdir else pipeline.default_outdir(scn)
     if not (out / pipeline.MODEL_FILE).is_file():
         raise NnikError(f"no trained model (run `nnik run {args.scenario}` first)", str(out))
-    from nnik.pick_state import require_deliverable
+    from nnik.files.pick_state import require_deliverable
 
     require_deliverable(out, "job")  # the job runs the firmware: only the verified pick, never the MLP instead
     res = run_job(out, Path(args.job), seg_um=args.seg_um, use_chip=False if args.no_chip else None)

@@ -8,14 +8,14 @@ from pathlib import Path
 import numpy as np
 from sklearn.linear_model import LinearRegression
 
-from nnik import pick_state
-from nnik.c_hash import dir_hash
-from nnik.data import Dataset, build_dataset
+from nnik.files import pick_state
+from nnik.files.c_hash import dir_hash
+from nnik.machine.data import Dataset, build_dataset
 from nnik.errors import NnikError
-from nnik.evaluate import error_stats, position_error_um, relative_pct
-from nnik.onnx_export import ONNX_TOLERANCE, check_onnx, export_onnx
-from nnik.scenario import Scenario
-from nnik.train import MAX_FIT_ROWS, TrainedModel, train_model
+from nnik.implementations.mlp.evaluate import error_stats, position_error_um, relative_pct
+from nnik.implementations.mlp.onnx_export import ONNX_TOLERANCE, check_onnx, export_onnx
+from nnik.machine.scenario import Scenario
+from nnik.implementations.mlp.train import MAX_FIT_ROWS, TrainedModel, train_model
 
 DATA_FILE = "data.npz"
 MODEL_FILE = "model.pt"
@@ -130,7 +130,7 @@ def _read_metrics(path: Path) -> dict:
 
 def write_metrics(outdir: Path, metrics: dict, merge: bool = True) -> None:
     """Write OUTDIR/metrics.json; later steps merge their own sections into it."""
-    from nnik.atomic_write import write_file_atomic
+    from nnik.files.atomic_write import write_file_atomic
 
     path = outdir / METRICS_FILE
     old = _read_metrics(path) if merge and path.is_file() else {}
@@ -146,14 +146,14 @@ FIXED_EVAL_FILE = "fixed_eval.npz"
 
 def _truth_for_um(scn, in_um: np.ndarray, fallback_q: np.ndarray) -> np.ndarray:
     """The exact IK at the integer-um inputs the C sees (analytic), or the held-out rows."""
-    from nnik.data import exact_targets
+    from nnik.machine.data import exact_targets
 
     return exact_targets(scn, in_um / 1000.0) if scn.mechanism.analytic else fallback_q
 
 
 def quantize_kernel(model: TrainedModel, ds: Dataset, kernel: str):
     """The scenario's integer model for one kernel ("fast" or "portable")."""
-    from nnik import fixedpoint as fx
+    from nnik.implementations.mlp import fixedpoint as fx
 
     scn = model.scenario
     tanh = None if scn.export["tanh"] == "default" else scn.export["tanh"]
@@ -169,10 +169,10 @@ def export(outdir: Path):
     """Quantise model.pt, write OUTDIR/c/mlp/NAME.{h,c} (the scenario's kernel) and, for
     comparison, OUTDIR/c/mlp/<other kernel>/NAME.{h,c}, and the baselines in OUTDIR/c/;
     returns both integer models (scenario's kernel first). Nothing is written unless every
-    file was generated and the range analysis held (see nnik.atomic_write)."""
-    from nnik import fixedpoint as fx
-    from nnik.atomic_write import Staged
-    from nnik.emit.export import render_model_c
+    file was generated and the range analysis held (see nnik.files.atomic_write)."""
+    from nnik.implementations.mlp import fixedpoint as fx
+    from nnik.files.atomic_write import Staged
+    from nnik.implementations.mlp.export import render_model_c
 
     model, ds = load_pair(outdir)
     scn = model.scenario
@@ -213,7 +213,7 @@ def mlp_flash_bytes(im) -> int:
 
 def _export_baselines(scn, im, ds, staged, in_um: np.ndarray, truth: np.ndarray) -> dict:
     """Stage c/NAME_float.{h,c} (where a closed form exists) and c/NAME_lut.{h,c}; their accuracy."""
-    from nnik import baselines as bl
+    from nnik.targets import baselines as bl
 
     out: dict = {}
     reason = bl.float_unavailable_reason(scn)
@@ -235,8 +235,8 @@ def _export_baselines(scn, im, ds, staged, in_um: np.ndarray, truth: np.ndarray)
 def _verify_baselines_host(outdir: Path, bmetrics: dict, ds: Dataset, inputs: dict) -> dict:
     """Run the baselines' C on the host: the LUT must match its integer model bit for bit; the
     float IK's delivered error is measured against the exact IK (libm is not bit-reproducible)."""
-    from nnik import baselines as bl
-    from nnik.verify_host import run_host_driver
+    from nnik.targets import baselines as bl
+    from nnik.targets.host import run_host_driver
 
     model = TrainedModel.load(outdir / MODEL_FILE)
     scn = model.scenario
@@ -257,7 +257,7 @@ def _verify_baselines_host(outdir: Path, bmetrics: dict, ds: Dataset, inputs: di
 
 def verify(outdir: Path, target: str = "host"):
     """Run the generated C on a target and compare it bit for bit with the integer model."""
-    from nnik.verify_host import verification_inputs, verify_host
+    from nnik.targets.host import verification_inputs, verify_host
 
     if target in TARGET_OPTS:
         return verify_target(outdir, target)
@@ -321,7 +321,7 @@ def estimate_row(im, target: str, measured: dict | None = None) -> dict:
 
 def verify_target(outdir: Path, target: str) -> dict:
     """Run the MLP (each compiler setting), the float IK and the LUT in the same harness."""
-    from nnik import baselines as bl
+    from nnik.targets import baselines as bl
     from nnik.targets import TargetError, available, run_on_target
 
     ok, reason = available(target)
@@ -386,7 +386,7 @@ def verify_target(outdir: Path, target: str) -> dict:
 # ---- every implementation family: fit, verify, pick ---------------------------------------------
 def problem_for(outdir: Path):
     """The implementation contract for OUTDIR's scenario, with its trained MLP cached in it."""
-    from nnik.implementations.mlp import remember_trained
+    from nnik.implementations.mlp.family import remember_trained
 
     model, ds = load_pair(outdir)
     problem = build_problem(model.scenario, ds, model)
@@ -402,7 +402,7 @@ def build_problem(scn, ds: Dataset, model=None):
 
     reference = None
     if not scn.mechanism.analytic:  # measured: the families compile a reference fitted to the marks
-        from nnik.reference import reference_for
+        from nnik.machine.reference import reference_for
 
         mlp = None if model is None else (model.predict, model.predict(ds.p["test"]) - ds.q["test"])
         reference = reference_for(scn, mlp)

@@ -12,12 +12,12 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from nnik.c_hash import files_hash
+from nnik.files.c_hash import files_hash
 from nnik.errors import NnikError
 from nnik.implementations import FAMILIES, Implementation, Problem
 from nnik.implementations.accuracy import accuracy
 from nnik.implementations.base import TARGETS
-from nnik.implementations.lut import CHIP_FLASH
+from nnik.implementations.lut.family import CHIP_FLASH
 from nnik.implementations.verify import verify_host, verify_on_target
 
 ALT_DIR = "alt"
@@ -246,7 +246,7 @@ def no_pick_reason(cands: list[Candidate], bests: dict[str, Candidate], target: 
 def write_choice(c_dir: Path, bests: dict[str, Candidate], pick: Candidate | None) -> None:
     """c/alt/<family>/ for every family's best, c/NAME.{c,h} for the pick, all at once (stale
     files of a family's folder are removed first)."""
-    from nnik.atomic_write import Staged
+    from nnik.files.atomic_write import Staged
 
     staged = Staged(c_dir)
     for fam, c in bests.items():

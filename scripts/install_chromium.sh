@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Install a headless-capable Chromium (Debian package `chromium`), used by tests/test_report.py
+# Install a headless-capable Chromium (Debian package `chromium`), used by tests/report/test_report.py
 # to render the HTML report and check that the page is not blank.
 #
 # Idempotent: does nothing when /usr/bin/chromium is already there. Needs root (or sudo).

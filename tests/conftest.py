@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 
 from nnik import pipeline
-from nnik.scenario import load_scenario
+from nnik.machine.scenario import load_scenario
 
 ROOT = Path(__file__).resolve().parents[1]
 DATASETS = ROOT / "datasets"

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from nnik import pick_state
+from nnik.files import pick_state
 from nnik.cli import main
 from tests.bad_input import GALVO, TINY_TRAINING
 from tests.conftest import require_tool

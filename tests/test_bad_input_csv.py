@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from nnik.cli import main
-from nnik.data import Dataset
+from nnik.machine.data import Dataset
 from tests.bad_input import MEASURED, fails
 from tests.conftest import DATASETS, write_toml
 

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 import torch
 
-from nnik.data import Dataset
+from nnik.machine.data import Dataset
 from tests.bad_input import copy_run, fails, tiny_run  # noqa: F401  (tiny_run is a fixture)
 
 

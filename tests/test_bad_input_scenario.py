@@ -63,7 +63,7 @@ def test_names_that_collide_with_c(tmp_path, capsys, name):
 
 
 def test_name_too_long_for_sdcc(tmp_path, capsys):
-    from nnik.c_text import MAX_NAME_LEN
+    from nnik.emit.c_text import MAX_NAME_LEN
 
     name = "g" * (MAX_NAME_LEN + 1)
     _generate_fails(tmp_path, capsys, GALVO.replace('name = "galvo_cba2012"', f'name = "{name}"'),

@@ -1,11 +1,15 @@
-"""Features of the "fast" kernel (nnik.emit.kernel, nnik.emit.fastc): unrolled, weights as constants in
+"""Features of the "fast" kernel (nnik.implementations.mlp.kernel, nnik.implementations.mlp.fastc): unrolled, weights as constants in
 the code, prefixed by the code path ("asm" or "c") each target takes."""
 
 from __future__ import annotations
 
 import numpy as np
 
-from nnik.emit import fastc, fastc_avr, fastc_p18
+from nnik.implementations.mlp import fastc
+
+from nnik.implementations.mlp import fastc_avr
+
+from nnik.implementations.mlp import fastc_p18
 from nnik.estimate.structure import structure
 from nnik.estimate.trace import dac_hits, hidden_trace, tanh_class_index, tanh_classes
 

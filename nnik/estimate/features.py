@@ -151,7 +151,7 @@ def is_far(frame: float | None, frame_model: dict | None) -> bool:
 def _dead_tanh_regions(im) -> list[str]:
     """Regions/segments of the tanh that a compiler can prove unreachable when tanh is inlined
     into the only hidden layer: T = (acc + 2^(sh-1)) >> sh of an int32 has |T| <= 2^(31-sh)."""
-    from nnik import activations
+    from nnik.implementations.mlp import tanh as activations
 
     if len(im.hidden) != 1 or im.hidden[0].saturate:
         return []
@@ -177,7 +177,7 @@ def _dead_tanh_regions(im) -> list[str]:
 
 
 def _tanh_table_bytes(variant) -> int:
-    from nnik import activations
+    from nnik.implementations.mlp import tanh as activations
 
     return int(activations.get_variant(variant).coeff_bytes)
 

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from nnik.emit import kernel as kmod
-from nnik.emit.export import render_model_c, write_sources
+from nnik.implementations.mlp import kernel as kmod
+from nnik.implementations.mlp.export import render_model_c, write_sources
 from nnik.emit.templating import RUNTIME
 from nnik.estimate.calibrations import DEFAULT_KERNEL_KEY
 

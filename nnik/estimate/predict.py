@@ -207,9 +207,9 @@ def load_integer_model(path: Path, tanh: str | None = None, weight_bits: int | N
                        kernel: str | None = None):
     """The IntegerModel of a trained model: OUTDIR (with model.pt, data.npz) or a model.pt,
     quantised as `nnik` exports it (the scenario's [export] tanh, weight_bits and kernel)."""
-    from nnik import fixedpoint as fx
-    from nnik.data import Dataset
-    from nnik.train import TrainedModel
+    from nnik.implementations.mlp import fixedpoint as fx
+    from nnik.machine.data import Dataset
+    from nnik.implementations.mlp.train import TrainedModel
 
     path = Path(path)
     mp = path / "model.pt" if path.is_dir() else path

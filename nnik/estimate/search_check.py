@@ -22,7 +22,7 @@ from nnik.estimate.calibrations import BUILTIN_PROFILES, REPO_ROOT, cal_path, fo
 from nnik.estimate.synthetic import CalSpec
 
 CHECK_DIR = REPO_ROOT / "build" / "estimator_search_check"
-WIDTHS = (3, 4, 5, 6, 8, 10, 12)  # nnik.search_space.MLP_WIDTHS (not imported: estimate stays below search)
+WIDTHS = (3, 4, 5, 6, 8, 10, 12)  # nnik.search.space.MLP_WIDTHS (not imported: estimate stays below search)
 MARGIN_PCT = 1.0  # added to the worst error seen, for the architectures no check has drawn
 KERNEL = "fast"
 

@@ -31,11 +31,11 @@ def _arch_label(hidden: Sequence[int], n_in: int = 2, n_out: int = 2) -> str:
 def sweep_model(hidden: tuple[int, ...], tanh: str | None, cache: Path = SWEEP_DIR, train_seconds: float = 3.0,
                 kernel: str | None = None):
     """A galvo_cba2012 network of the given hidden sizes, trained briefly (cached), quantised."""
-    from nnik import fixedpoint as fx
+    from nnik.implementations.mlp import fixedpoint as fx
     from nnik import pipeline
-    from nnik.data import Dataset
-    from nnik.scenario import load_scenario
-    from nnik.train import TrainedModel
+    from nnik.machine.data import Dataset
+    from nnik.machine.scenario import load_scenario
+    from nnik.implementations.mlp.train import TrainedModel
 
     out = Path(cache) / ("h" + "x".join(map(str, hidden)))
     if not (out / pipeline.MODEL_FILE).is_file():

@@ -46,7 +46,7 @@ JUDGED_SIZES = range(4, 17)
 def calibration_specs(kernel: str | None = None) -> list[CalSpec]:
     """The calibration set: hidden sizes outside 4-16 only (those are what the sweep judges).
     For the fast kernel the structural networks use its own tanh tables (tanh="")."""
-    from nnik import activations
+    from nnik.implementations.mlp import tanh as activations
 
     base = "lerp_mr4" if "lerp_mr4" in activations.VARIANTS else activations.DEFAULT_VARIANT
     fast = kernel == "fast"
@@ -115,7 +115,7 @@ def calibration_specs(kernel: str | None = None) -> list[CalSpec]:
 
 @functools.cache
 def _scenario(family: str):
-    from nnik.scenario import Scenario
+    from nnik.machine.scenario import Scenario
 
     path = DATASETS / f"{_SCENARIO_FILES[family]}.toml"
     raw = tomllib.loads(path.read_text())
@@ -127,12 +127,12 @@ def _scenario(family: str):
 
 def synthetic_model(spec: CalSpec, kernel: str | None = None):
     """An IntegerModel with random weights of the given shape and format knobs (quantised by
-    the real nnik.fixedpoint.quantize, so it is a valid model of the current generator)."""
+    the real nnik.implementations.mlp.fixedpoint.quantize, so it is a valid model of the current generator)."""
     import torch
 
-    from nnik import fixedpoint as fx
-    from nnik.data import Dataset, exact_targets, sample_points
-    from nnik.train import MLP, TrainedModel, make_scaling
+    from nnik.implementations.mlp import fixedpoint as fx
+    from nnik.machine.data import Dataset, exact_targets, sample_points
+    from nnik.implementations.mlp.train import MLP, TrainedModel, make_scaling
 
     scn = copy.deepcopy(_scenario(spec.scenario))
     scn.network["hidden"] = tuple(spec.hidden)

@@ -21,7 +21,7 @@ def typical_inputs(im, n: int = TYPICAL_N, seed: int = TYPICAL_SEED) -> np.ndarr
 
 def tanh_classes(variant) -> list[str]:
     """Input classes of a tanh variant whose C takes different paths: region/segment x sign."""
-    from nnik import activations
+    from nnik.implementations.mlp import tanh as activations
 
     v = activations.get_variant(variant)
     if v.kind == "lerp":
@@ -35,7 +35,7 @@ def tanh_classes(variant) -> list[str]:
 
 def tanh_class_index(variant, T: np.ndarray) -> np.ndarray:
     """Index into tanh_classes(variant) for each int16 tanh input T."""
-    from nnik import activations
+    from nnik.implementations.mlp import tanh as activations
 
     v = activations.get_variant(variant)
     T = np.asarray(T, dtype=np.int64)
@@ -77,16 +77,16 @@ def _tanh_of(im, L, T):
     fn = getattr(im, "_tanh", None)
     if fn is not None:
         return np.asarray(fn(L, T), dtype=np.int64)
-    from nnik import activations
+    from nnik.implementations.mlp import tanh as activations
 
     return activations.tanh_int(T, im.tanh_variant).astype(np.int64)
 
 
 def hidden_trace(im, in_um: np.ndarray) -> _Trace:
-    """The integer data path (as nnik.fixedpoint.IntegerModel computes it), keeping what the
+    """The integer data path (as nnik.implementations.mlp.fixedpoint.IntegerModel computes it), keeping what the
     cost depends on: operand signs, tanh inputs, clamp hits."""
-    from nnik.domain import round_half_up_shift
-    from nnik.fixedpoint import I16_MAX, clamp_um_from, round_half_up_shift_vec
+    from nnik.machine.domain import round_half_up_shift
+    from nnik.implementations.mlp.fixedpoint import I16_MAX, clamp_um_from, round_half_up_shift_vec
 
     in_um = np.asarray(in_um, dtype=np.int64)
     x_c, _ = clamp_um_from(in_um, im.inp.lo, im.inp.hi)
@@ -115,7 +115,7 @@ def sign_counts(W: np.ndarray, v: np.ndarray) -> tuple[float, np.ndarray, np.nda
 
 
 def dac_hits(im, in_um: np.ndarray) -> np.ndarray:
-    from nnik.domain import round_half_up_shift
+    from nnik.machine.domain import round_half_up_shift
 
     o = im.out
     if o.code_range is None:

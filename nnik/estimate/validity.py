@@ -31,7 +31,7 @@ _INCLUDE = re.compile(r'^\s*#\s*include\s+"([^"]+)"', re.MULTILINE)
 
 
 def _portable_specs() -> list[CalSpec]:
-    from nnik import activations
+    from nnik.implementations.mlp import tanh as activations
 
     S = CalSpec
     per_variant = [S("galvo", (3,), tanh=v, seed=300, gain=3.0) for v in activations.VARIANTS]

@@ -13,7 +13,7 @@ from nnik.implementations.problem import Problem
 
 __all__ = ["FAMILIES", "Implementation", "IntRun", "Problem", "family"]
 
-_MODULES = {"mlp": "mlp", "poly": "poly", "lut": "lut", "hybrid": "hybrid"}
+_MODULES = {"mlp": "mlp.family", "poly": "poly.family", "lut": "lut.family", "hybrid": "hybrid.family"}
 
 
 def _load() -> dict[str, type[Implementation]]:
@@ -22,7 +22,7 @@ def _load() -> dict[str, type[Implementation]]:
         try:
             m = importlib.import_module(f"nnik.implementations.{mod}")
         except ModuleNotFoundError as exc:
-            if exc.name != f"nnik.implementations.{mod}":
+            if exc.name not in (f"nnik.implementations.{mod}", f"nnik.implementations.{mod.partition('.')[0]}"):
                 raise
             continue
         out[fam] = m.IMPLEMENTATION

@@ -1,4 +1,4 @@
-"""One interface for an IK implementation, as :class:`nnik.kinematics.base.Mechanism` serves
+"""One interface for an IK implementation, as :class:`nnik.machine.kinematics.base.Mechanism` serves
 every machine. A family (``mlp``, ``poly``, ``lut``, ``hybrid``) is one small module in this
 package with one :class:`Implementation` subclass:
 

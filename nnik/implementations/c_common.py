@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from nnik.c_text import c_comment_safe
+from nnik.emit.c_text import c_comment_safe
 from nnik.errors import NnikError
 from nnik.emit.templating import environment
 
@@ -20,7 +20,7 @@ def i32(v: int) -> str:
 
 
 def comment_safe(text: str) -> str:
-    """User text for a C comment (see :func:`nnik.c_text.c_comment_safe`)."""
+    """User text for a C comment (see :func:`nnik.emit.c_text.c_comment_safe`)."""
     return c_comment_safe(text)
 
 

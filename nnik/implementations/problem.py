@@ -14,7 +14,7 @@ A :class:`Problem` is built once per scenario. It fixes
   4001 points along each edge, the corners and 200,000 random integer points, labelled with the
   exact IK, or the held-out rows of measured data.
 
-A measured machine with a ``reference`` (nnik.reference, fitted to the marks) is compiled like an
+A measured machine with a ``reference`` (nnik.machine.reference, fitted to the marks) is compiled like an
 analytic one: ``truth()`` is the reference, the check set is the dense set restricted to the
 marks' convex hull, and ``error_floor`` (the reference's estimated max error against the machine)
 is what selection adds to an implementation's error before comparing it with ``max_error``.
@@ -30,7 +30,7 @@ from functools import cached_property
 import numpy as np
 
 from nnik.errors import NnikError
-from nnik.scenario import Scenario
+from nnik.machine.scenario import Scenario
 
 CHECK_GRID = 1001  # dense check grid per axis (inclusive of both edges)
 EDGE_POINTS = 4001  # points along each domain edge
@@ -66,10 +66,10 @@ class Problem:
     """One scenario's IK, as every implementation family sees it (see the module docstring)."""
 
     scn: Scenario
-    dataset: object  # nnik.data.Dataset: the scenario's samples (the MLP trains on them)
+    dataset: object  # nnik.machine.data.Dataset: the scenario's samples (the MLP trains on them)
     unit_um: float = 1.0
     cache: dict = field(default_factory=dict)  # families may keep fitted artefacts here (e.g. trained MLPs)
-    reference: object | None = None  # nnik.reference.Reference of a measured machine
+    reference: object | None = None  # nnik.machine.reference.Reference of a measured machine
 
     @property
     def name(self) -> str:
@@ -128,7 +128,7 @@ class Problem:
 
     def truth(self, in_units: np.ndarray) -> np.ndarray:
         """Exact IK (or the measured machine's reference) in actuator units at integer inputs."""
-        from nnik.data import exact_targets
+        from nnik.machine.data import exact_targets
 
         if self.reference is not None:
             return self.reference(self.to_mm(in_units))

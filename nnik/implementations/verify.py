@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
-from nnik.c_hash import dir_hash, files_hash
+from nnik.files.c_hash import dir_hash, files_hash
 from nnik.errors import NnikError
 from nnik.implementations.base import Implementation
 
@@ -18,7 +18,7 @@ HOST_RANDOM = 20_000
 def _write(impl: Implementation, c_dir: Path, write: bool = True) -> str | None:
     """Write the implementation's C into c_dir (or, with ``write=False``, leave the files there
     as they are); returns the hash of the C that will run."""
-    from nnik.emit.export import write_sources
+    from nnik.implementations.mlp.export import write_sources
 
     if not write:
         return dir_hash(c_dir, impl.problem.name)
@@ -57,7 +57,7 @@ def target_vectors(impl: Implementation, n: int = 200, seed: int = 1) -> np.ndar
 def verify_host(impl: Implementation, c_dir: Path, vectors: np.ndarray | None = None, write: bool = True) -> dict:
     """Compile NAME.c (portable path) with sanitizers, run it, compare with the integer model
     (``write=False``: the NAME.{c,h} already in c_dir, as they are)."""
-    from nnik.verify_host import run_host_driver
+    from nnik.targets.host import run_host_driver
 
     c_hash = _write(impl, c_dir, write)
     vec = host_vectors(impl) if vectors is None else vectors

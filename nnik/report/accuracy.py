@@ -159,7 +159,7 @@ def plot_error_map(ctx) -> Fig | str:
         if inp.model is None:
             return f"error map not run: {inp.model_reason} and {inp.fixed_eval_reason}"
         if ctx.analytic:
-            from nnik.data import exact_targets
+            from nnik.machine.data import exact_targets
 
             pts = ws.grid(GRID_N)
             err = (inp.model.predict(pts) - exact_targets(scn, pts)).reshape(GRID_N, GRID_N, -1)

@@ -50,7 +50,7 @@ class Context:
         scn = self.inp.scenario
         if scn is not None and self.analytic:
             try:
-                from nnik.evaluate import position_error_um
+                from nnik.implementations.mlp.evaluate import position_error_um
 
                 d["position_um"] = position_error_um(scn, fe["q_delivered"], fe["p_test"])
             except Exception:  # noqa: BLE001

@@ -7,7 +7,7 @@ holds (its hash is recomputed from the file); otherwise the row says the C chang
 
 from __future__ import annotations
 
-from nnik.c_hash import dir_hash
+from nnik.files.c_hash import dir_hash
 from nnik.report.document import D_CYC, D_UNIT, Fig, Section, Table, keypath, lookup, not_run_cell, num, txt
 
 PNG_FRONT = "implementations_front.png"

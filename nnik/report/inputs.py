@@ -22,11 +22,11 @@ FIXED_EVAL_ARRAYS = ("p_test", "q_true", "q_float", "q_fixed", "q_delivered")
 class Inputs:
     model_dir: Path
     metrics: dict
-    model: Any = None  # nnik.train.TrainedModel
+    model: Any = None  # nnik.implementations.mlp.train.TrainedModel
     model_reason: str = ""
-    scenario: Any = None  # nnik.scenario.Scenario
+    scenario: Any = None  # nnik.machine.scenario.Scenario
     scenario_reason: str = ""
-    data: Any = None  # nnik.data.Dataset
+    data: Any = None  # nnik.machine.data.Dataset
     data_reason: str = ""
     fixed_eval: dict | None = None
     fixed_eval_reason: str = ""
@@ -60,7 +60,7 @@ STALE = "the C in c/mlp/ changed since this was measured (run `nnik verify` agai
 def drop_stale(model_dir: Path, metrics: dict) -> dict:
     """Results of the MLP's C (host, avr, pic18) stay only while c/mlp/NAME.{c,h} hash as they
     did when the result was measured; others become {"not_run": STALE}."""
-    from nnik.c_hash import dir_hash
+    from nnik.files.c_hash import dir_hash
 
     now = dir_hash(Path(model_dir) / "c" / "mlp", str(metrics.get("name", "")))
     if isinstance(metrics.get("host"), dict) and metrics["host"].get("c_hash") != now:
@@ -73,11 +73,11 @@ def drop_stale(model_dir: Path, metrics: dict) -> dict:
 
 def mark_pick(model_dir: Path, metrics: dict) -> dict:
     """The pick's row in the selection shows only figures measured on the bytes of c/NAME.c on
-    disk (nnik.pick_state decides): a pick that is not the verified one, or not a finished one,
+    disk (nnik.files.pick_state decides): a pick that is not the verified one, or not a finished one,
     keeps its name but says NOT verified, with both hashes and the command that mends it; a pick
     re-verified by `nnik verify` after a change shows the figures of its new bytes.
     metrics["pick_status"] holds the verdict."""
-    from nnik.pick_state import CHECKS, status
+    from nnik.files.pick_state import CHECKS, status
 
     sel = metrics.get("selection")
     row = next((r for r in sel.get("implementations") or [] if isinstance(r, dict) and r.get("picked")), None) \
@@ -113,7 +113,7 @@ def load_inputs(model_dir: Path) -> Inputs:
     mp = model_dir / MODEL_FILE
     if mp.is_file():
         try:
-            from nnik.train import TrainedModel
+            from nnik.implementations.mlp.train import TrainedModel
 
             inp.model = TrainedModel.load(mp)
             inp.scenario = inp.model.scenario
@@ -129,7 +129,7 @@ def load_inputs(model_dir: Path) -> Inputs:
         src = inp.metrics.get("scenario")
         if src and Path(src).is_file():
             try:
-                from nnik.scenario import load_scenario
+                from nnik.machine.scenario import load_scenario
 
                 inp.scenario = load_scenario(src)
             except Exception as exc:  # noqa: BLE001
@@ -140,7 +140,7 @@ def load_inputs(model_dir: Path) -> Inputs:
     dp = model_dir / DATA_FILE
     if dp.is_file():
         try:
-            from nnik.data import Dataset
+            from nnik.machine.data import Dataset
 
             inp.data = Dataset.load(dp)
             inp.files.append((DATA_FILE, True, "test split"))

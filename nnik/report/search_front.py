@@ -16,7 +16,7 @@ point at its estimate.
 
 from __future__ import annotations
 
-from nnik.c_hash import dir_hash
+from nnik.files.c_hash import dir_hash
 from nnik.report.document import D_CYC, D_UNIT, Cell, Fig, Section, Table, keypath, not_run_cell, num, txt
 from nnik.report.implementations import (CHIPS, _c_hash, _check_cell, best_point, comparable, estimated_costs,
                                          float_ik_cycles, not_verified_sentence, searched, versus_other_family)

@@ -26,14 +26,14 @@ def build(ctx) -> Section:
     th = m.get("tanh") if isinstance(m.get("tanh"), dict) else None
     variant = (th or {}).get("variant") or lookup(m, "fixed", "tanh_variant")
     try:
-        act = importlib.import_module("nnik.activations")  # optional here
+        act = importlib.import_module("nnik.implementations.mlp.tanh")  # optional here
     except Exception as exc:  # noqa: BLE001
-        act, act_reason = None, f"nnik.activations could not be imported ({short_exc(exc)})"
+        act, act_reason = None, f"nnik.implementations.mlp.tanh could not be imported ({short_exc(exc)})"
     else:
         act_reason = ""
         for need in ("tanh_int", "VARIANTS", "sweep"):
             if not hasattr(act, need):
-                act, act_reason = None, f"nnik.activations has no `{need}`"
+                act, act_reason = None, f"nnik.implementations.mlp.tanh has no `{need}`"
                 break
     default_used = False
     if variant is None and act is not None:
@@ -53,14 +53,14 @@ def build(ctx) -> Section:
         try:
             var_obj = act.VARIANTS[variant]
             sw = act.sweep(variant)
-            note = "recomputed now by nnik.activations.sweep"
+            note = "recomputed now by nnik.implementations.mlp.tanh.sweep"
             if default_used:
                 note += " for the default variant (no variant named in metrics.json)"
             t.rows.append([txt("recomputed", "label"), txt(variant), num(sw.get("max_lsb"), D_LSB, cls="num derived"),
                            num(sw.get("rms_lsb"), D_LSB, cls="num derived"), txt(note)])
         except Exception as exc:  # noqa: BLE001
             var_obj = None
-            act_reason = f"variant {variant!r} not available in nnik.activations ({short_exc(exc)})"
+            act_reason = f"variant {variant!r} not available in nnik.implementations.mlp.tanh ({short_exc(exc)})"
     for src, what, val, u in PUB_TANH:
         lsb = val if u == "LSB" else val * Q15
         t.rows.append([txt(f"published: {src}", "published"), txt(what), num(lsb, D_LSB, cls="num derived published"),

@@ -7,9 +7,9 @@ from pathlib import Path
 
 import numpy as np
 
-from nnik.data import build_dataset
+from nnik.machine.data import build_dataset
 from nnik.implementations.problem import Problem
-from nnik.scenario import load_scenario
+from nnik.machine.scenario import load_scenario
 
 DATASETS = Path(__file__).resolve().parents[2] / "datasets"
 

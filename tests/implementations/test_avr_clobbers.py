@@ -11,7 +11,7 @@ import re
 import pytest
 
 from nnik.implementations import family
-from nnik.implementations.lut_reference import REFERENCES, reference_impl
+from nnik.implementations.lut.reference import REFERENCES, reference_impl
 
 # instructions that do not write their first register operand
 NO_WRITE = {"st", "std", "sts", "cp", "cpc", "cpi", "tst", "sbrs", "sbrc", "sbic", "sbis", "out", "push",

@@ -15,9 +15,9 @@ from hypothesis import strategies as st
 from nnik import pipeline
 from nnik.errors import NnikError
 from nnik.implementations.accuracy import accuracy
-from nnik.implementations.lut import LutImpl, cell_ladder, table_budget, table_entries
-from nnik.implementations.lut_table import MAX_NODES, dependence, fold_plan
-from nnik.implementations.poly import _symmetry
+from nnik.implementations.lut.family import LutImpl, cell_ladder, table_budget, table_entries
+from nnik.implementations.lut.table import MAX_NODES, dependence, fold_plan
+from nnik.implementations.poly.family import _symmetry
 from nnik.selection import _stalled
 from tests.bad_input import copy_run, tiny_run  # noqa: F401 (fixture)
 from tests.implementations.lut_helpers import host_check, problem_from

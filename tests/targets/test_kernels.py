@@ -16,12 +16,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from nnik import fixedpoint as fx
-from nnik.data import Dataset
-from nnik.emit.export import render_model_c, write_sources
+from nnik.implementations.mlp import fixedpoint as fx
+from nnik.machine.data import Dataset
+from nnik.implementations.mlp.export import render_model_c, write_sources
 from nnik.targets import run_on_target
 from tests.targets.runner_helpers import need_toolchain
-from nnik.train import TrainedModel
+from nnik.implementations.mlp.train import TrainedModel
 
 AVR_TARGET_CYCLES = 1000  # the mission's targets for galvo_cba2012, whole NAME_ik call
 PIC18_TARGET_CYCLES = 3000

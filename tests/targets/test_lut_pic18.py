@@ -6,10 +6,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from nnik import baselines as bl
-from nnik.data import build_dataset
-from nnik.emit.export import write_sources
-from nnik.scenario import load_scenario
+from nnik.targets import baselines as bl
+from nnik.machine.data import build_dataset
+from nnik.implementations.mlp.export import write_sources
+from nnik.machine.scenario import load_scenario
 from tests.conftest import DATASETS
 from tests.targets.runner_helpers import need_toolchain
 

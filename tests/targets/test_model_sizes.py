@@ -9,10 +9,10 @@ import subprocess
 import numpy as np
 import pytest
 
-from nnik import baselines as bl
-from nnik.data import build_dataset
-from nnik.emit.export import write_sources
-from nnik.scenario import load_scenario
+from nnik.targets import baselines as bl
+from nnik.machine.data import build_dataset
+from nnik.implementations.mlp.export import write_sources
+from nnik.machine.scenario import load_scenario
 from nnik.targets.pic18 import parse_map
 from nnik.targets.pic18_sizes import parse_detail
 from tests.conftest import DATASETS

@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from nnik import baselines as bl
-from nnik.emit.export import write_sources
-from nnik.scenario import load_scenario
+from nnik.targets import baselines as bl
+from nnik.implementations.mlp.export import write_sources
+from nnik.machine.scenario import load_scenario
 from nnik.targets import TargetError
 from nnik.targets.pic18 import parse_gpsim_output
 from tests.conftest import DATASETS

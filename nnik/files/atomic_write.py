@@ -1,0 +1,78 @@
+"""Generated files land all at once or not at all: a stage collects its files, and only when it
+has everything does :meth:`Staged.commit` write them to a temporary folder beside the output
+and move each into place (``os.replace``, atomic per file). A stage that fails before the
+commit leaves the output directory exactly as it was."""
+
+from __future__ import annotations
+
+import os
+import shutil
+import tempfile
+from pathlib import Path
+
+
+def write_file_atomic(path: Path, data: str | bytes) -> None:
+    """Replace one file in a single step: a temporary file beside it, flushed to disk, then
+    ``os.replace`` (and the directory flushed), so a crash leaves the old file or the new one,
+    never half of either."""
+    path = Path(path)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    try:
+        with os.fdopen(fd, "wb") as f:
+            f.write(data.encode() if isinstance(data, str) else data)
+            f.flush()
+            os.fsync(f.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    fsync_dir(path.parent)
+
+
+def fsync_dir(d: Path) -> None:
+    """Flush a directory entry change (a rename or an unlink) to disk."""
+    try:
+        fd = os.open(d, os.O_RDONLY)
+    except OSError:
+        return
+    try:
+        os.fsync(fd)
+    except OSError:
+        pass
+    finally:
+        os.close(fd)
+
+
+class Staged:
+    def __init__(self, root: Path):
+        self.root = Path(root)
+        self.files: dict[Path, bytes] = {}  # relative path -> content
+
+    def add(self, files: dict[str, str], subdir: str | Path = ".", runtime_headers: bool = True) -> None:
+        """Generated sources for root/subdir, plus the runtime headers they include."""
+        from nnik.implementations.mlp.export import RUNTIME, RUNTIME_HEADERS
+
+        d = Path(subdir)
+        for name, text in files.items():
+            self.files[d / name] = text.encode()
+        if runtime_headers:
+            for h in RUNTIME_HEADERS:
+                self.files[d / h] = (RUNTIME / h).read_bytes()
+
+    def commit(self) -> list[Path]:
+        self.root.mkdir(parents=True, exist_ok=True)
+        tmp = Path(tempfile.mkdtemp(prefix=".staging-", dir=self.root))
+        try:
+            for rel, data in self.files.items():
+                p = tmp / rel
+                p.parent.mkdir(parents=True, exist_ok=True)
+                p.write_bytes(data)
+            out = []
+            for rel in self.files:
+                dest = self.root / rel
+                dest.parent.mkdir(parents=True, exist_ok=True)
+                os.replace(tmp / rel, dest)
+                out.append(dest)
+            return out
+        finally:
+            shutil.rmtree(tmp, ignore_errors=True)

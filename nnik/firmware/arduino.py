@@ -1,0 +1,113 @@
+"""`nnik export OUTDIR --arduino DIR`: an Arduino / PlatformIO library around OUTDIR/c/NAME.c.
+
+DIR/library.properties, DIR/library.json, DIR/src/ (NAME.c/.h, the runtime headers, the G-code
+engine and its configuration), DIR/examples/NAME_selftest/ (golden vectors from the integer
+model, PASS/FAIL and cycles per call) and DIR/examples/NAME_gcode/ (G-code over Serial to two
+stepper drivers); each example has a Makefile for Debian's arduino-mk.
+"""
+
+from __future__ import annotations
+
+import shutil
+from functools import lru_cache
+from pathlib import Path
+
+import jinja2
+import numpy as np
+
+from nnik import pipeline
+from nnik.machine.domain import domain_um
+from nnik.emit.templating import CODEGEN, RUNTIME, environment
+from nnik.firmware.config import MachineConfig, default_machine
+from nnik.emit.c_text import c_comment_safe
+from nnik.firmware.ik_oracle import ik_oracle, ik_sources, load_scenario_of, picked_implementation
+
+ARDUINO = CODEGEN / "arduino"
+ENGINE_FILES = ("nnik_gcode.h", "nnik_gcode.c")
+VERSION = "0.1.0"
+N_GOLDEN = 64
+
+
+@lru_cache(maxsize=1)
+def _env() -> jinja2.Environment:
+    return environment().overlay(loader=jinja2.FileSystemLoader(str(ARDUINO / "templates")))
+
+
+def golden_vectors(scn, n: int = N_GOLDEN, seed: int = 0) -> np.ndarray:
+    """Corners, centre, edge midpoints, random points of the domain and a few outside it (um)."""
+    lo, hi = domain_um(scn.workspace)
+    mid = (lo + hi) // 2
+    span = hi - lo
+    fixed = [[lo[0], lo[1]], [lo[0], hi[1]], [hi[0], lo[1]], [hi[0], hi[1]], mid,
+             [mid[0], lo[1]], [mid[0], hi[1]], [lo[0], mid[1]], [hi[0], mid[1]],
+             [lo[0] - 1, mid[1]], [hi[0] + span[0], hi[1] + span[1]], [lo[0] - span[0], lo[1] - span[1]]]
+    rng = np.random.default_rng(seed)
+    rand = rng.integers(lo, hi + 1, (max(0, n - len(fixed)), 2))
+    return np.concatenate([np.asarray(fixed, dtype=np.int64), rand])
+
+
+def export_arduino(outdir: Path, libdir: Path, machine: MachineConfig | None = None) -> dict:
+    """Write the library; returns {"libname", "dir", "name", "machine", "golden"}."""
+    outdir, libdir = Path(outdir), Path(libdir)
+    scn = load_scenario_of(outdir)
+    name = scn.name
+    c_dir = ik_sources(outdir, name)
+    machine = machine or default_machine(scn)
+    ik = ik_oracle(outdir)
+    vec = golden_vectors(scn)
+    out, flags = ik(vec)
+    rows = [[int(a), int(b), int(c), int(d), int(f)] for (a, b), (c, d), f in zip(vec.tolist(), out.tolist(), flags.tolist())]
+    pick = picked_implementation(outdir)
+    if pick is not None:
+        what, hash_ = pick.describe(), pick.source_hash()
+    else:
+        what = "MLP " + "-".join(map(str, _shape(outdir)))
+        hash_ = pipeline.load_metrics(outdir).get("fixed", {}).get("model_hash", "-")
+    src = libdir / "src"
+    src.mkdir(parents=True, exist_ok=True)
+    for f in [c_dir / f"{name}.c", c_dir / f"{name}.h", *sorted(RUNTIME.glob("*.h"))]:
+        shutil.copy(f, src / f.name)
+    for f in ENGINE_FILES:
+        shutil.copy(ARDUINO / "src" / f, src / f)
+    libname = f"nnik_{name}"
+    ctx = dict(name=name, scenario=c_comment_safe(scn.source), libname=libname, version=VERSION,
+               shape=c_comment_safe(what).replace('"', "'"),
+               description=c_comment_safe(scn.raw.get("description") or name), unit=scn.unit, outputs=scn.outputs, model_hash=hash_,
+               origin=list(machine.origin_um), seg_um=machine.seg_um, tick_hz=machine.tick_hz, homepage=homepage(),
+               rapid_um_min=machine.rapid_um_min, feed_um_min=machine.feed_um_min, rows=rows, n=len(rows))
+    env = _env()
+    files = {
+        libdir / "library.properties": "library.properties.j2",
+        libdir / "library.json": "library.json.j2",
+        src / "nnik_gcode_config.h": "gcode_config.h.j2",
+        libdir / "examples" / f"{name}_selftest" / f"{name}_selftest.ino": "selftest.ino.j2",
+        libdir / "examples" / f"{name}_gcode" / f"{name}_gcode.ino": "gcode.ino.j2",
+    }
+    for example in (f"{name}_selftest", f"{name}_gcode"):
+        files[libdir / "examples" / example / "Makefile"] = "Makefile.j2"
+    for path, tmpl in files.items():
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(env.get_template(tmpl).render(**ctx, example=path.parent.name, libdir_name=libdir.resolve().name))
+    return {"libname": libname, "dir": str(libdir), "name": name, "machine": machine, "golden": len(rows)}
+
+
+def homepage() -> str:
+    """The project's homepage, from one place: pyproject.toml's [project.urls] Homepage (the
+    source checkout's file, else the installed package's metadata). Empty when none is set, as
+    now: nnik publishes none, and the README says how to fill the library's url= field."""
+    import tomllib
+    from importlib import metadata
+
+    pyproject = Path(__file__).resolve().parents[2] / "pyproject.toml"
+    if pyproject.is_file():
+        urls = tomllib.loads(pyproject.read_text()).get("project", {}).get("urls", {})
+        return str(urls.get("Homepage", ""))
+    try:
+        entries = metadata.metadata("nnik").get_all("Project-URL") or []
+    except metadata.PackageNotFoundError:
+        return ""
+    return next((u.strip() for label, _, u in (e.partition(",") for e in entries) if label.strip() == "Homepage"), "")
+
+
+def _shape(outdir: Path) -> list[int]:
+    return pipeline.load_metrics(outdir).get("network", {}).get("shape", [])

@@ -1,0 +1,120 @@
+"""Contour error of a job (Koren): how far each reached position is from the programmed path.
+
+Reached positions are the exact forward kinematics of the step counts after every stepper tick
+that moved a motor. The error splits into:
+  * IK error: at each segment end, the delivered IK command's position vs the path (the
+    model's error plus the rounding to whole actuator units);
+  * rounding: the same for the exact IK rounded half up (what any IK on these motors keeps);
+  * chord (segmentation) error: the exact IK at consecutive segment ends, joined by a straight
+    line in joint space (what the DDA does), mapped through the exact forward kinematics.
+Distances are to the move itself or its neighbours (corners), in micrometres.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from nnik.firmware.config import MachineConfig
+from nnik.firmware.gcode.motion import Move, Plan, Segments
+
+CHORD_SAMPLES = 16
+
+
+def _stats(d: np.ndarray) -> dict:
+    if not len(d):
+        return {"max": 0.0, "rms": 0.0, "n": 0}
+    return {"max": float(d.max()), "rms": float(np.sqrt((d**2).mean())), "n": int(len(d))}
+
+
+def _line_dist(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    ab = b - a
+    L2 = float(ab @ ab)
+    t = np.zeros(len(p)) if L2 == 0 else np.clip(((p - a) @ ab) / L2, 0.0, 1.0)
+    return np.linalg.norm(p - (a + t[:, None] * ab), axis=1)
+
+
+def _arc_dist(p: np.ndarray, c: np.ndarray, r: float, a: np.ndarray, b: np.ndarray, ccw: bool) -> np.ndarray:
+    """Distance to the arc from a to b about c (radius r), counter-clockwise if ccw."""
+    ang = lambda v: np.arctan2(v[..., 1], v[..., 0])  # noqa: E731
+    a0, b0 = ang(a - c), ang(b - c)
+    sweep = (b0 - a0) % (2 * np.pi) if ccw else (a0 - b0) % (2 * np.pi)
+    if sweep == 0:
+        sweep = 2 * np.pi  # end = start: a full turn
+    rel = (ang(p - c) - a0) % (2 * np.pi) if ccw else (a0 - ang(p - c)) % (2 * np.pi)
+    radial = np.abs(np.linalg.norm(p - c, axis=1) - r)
+    ends = np.minimum(np.linalg.norm(p - a, axis=1), np.linalg.norm(p - b, axis=1))
+    return np.where(rel <= sweep, radial, ends)
+
+
+def move_dist(p_mm: np.ndarray, mv: Move, origin_mm: np.ndarray) -> np.ndarray:
+    a = origin_mm + np.asarray(mv.start) / 1000.0
+    b = origin_mm + np.asarray(mv.end) / 1000.0
+    if mv.kind == "line":
+        return _line_dist(p_mm, a, b)
+    c = origin_mm + np.asarray(mv.center) / 1000.0
+    return _arc_dist(p_mm, c, mv.radius / 1000.0, a, b, mv.ccw)
+
+
+def path_dist_um(p_mm: np.ndarray, move_idx: np.ndarray, moves: list[Move], origin_mm: np.ndarray) -> np.ndarray:
+    """Distance (um) of each point to its move or the moves before and after it."""
+    d = np.full(len(p_mm), np.inf)
+    for m in np.unique(move_idx):
+        sel = move_idx == m
+        for k in (m - 1, m, m + 1):
+            if 0 <= k < len(moves):
+                d[sel] = np.minimum(d[sel], move_dist(p_mm[sel], moves[k], origin_mm))
+    return d * 1000.0
+
+
+def segment_moves(plan: Plan) -> np.ndarray:
+    """Move index of every segment."""
+    idx = np.zeros(len(plan.ends), np.int64)
+    for m, mv in enumerate(plan.moves):
+        idx[mv.first_seg:mv.first_seg + mv.n_seg] = m
+    return idx
+
+
+def units_to_mm(scn, units: np.ndarray) -> np.ndarray:
+    m = scn.mechanism
+    return m.forward(m.q_rest + scn.actuator.from_units(np.asarray(units, dtype=np.float64)))
+
+
+def reached(seg: Segments, events: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Counts after every tick that stepped (T, 2), its segment (T,) and its tick from the
+    start of the job (T,), the segments running back to back."""
+    from nnik.firmware.gcode.steps import positions
+
+    counts = positions(seg, events)[1:]
+    if not len(events):
+        return counts, np.zeros(0, np.int64), np.zeros(0, np.int64)
+    key = events[:, 0] * (int(seg.ticks.max()) + 1) + events[:, 1]
+    last = np.r_[key[1:] != key[:-1], True]  # the last event of each (segment, tick)
+    start = np.concatenate([[0], np.cumsum(seg.ticks)[:-1]])
+    return counts[last], events[last, 0], start[events[last, 0]] + events[last, 1]
+
+
+def contour_report(scn, cfg: MachineConfig, plan: Plan, seg: Segments, events: np.ndarray) -> dict:
+    origin_mm = np.asarray(cfg.origin_um, dtype=np.float64) / 1000.0
+    seg_move = segment_moves(plan)
+    ends_mm = origin_mm + seg.ends_um / 1000.0
+    counts, seg_of, tick = reached(seg, events)
+    p_reached = units_to_mm(scn, counts) if len(counts) else np.zeros((0, 2))
+    total = path_dist_um(p_reached, seg_move[seg_of], plan.moves, origin_mm) if len(counts) else np.zeros(0)
+    ik = path_dist_um(units_to_mm(scn, seg.steps[1:]), seg_move, plan.moves, origin_mm)
+    out = {"segments": int(len(seg.ticks)), "steps": int(len(events)), "ticks": int(seg.ticks.sum()),
+           "seconds": float(seg.ticks.sum() / cfg.tick_hz), "clamped": int(seg.clamped.sum()),
+           "contour_um": _stats(total), "ik_um": _stats(ik),
+           "plot": {"reached_mm": p_reached, "error_um": total, "time_s": tick / cfg.tick_hz}}
+    if scn.mechanism.analytic:
+        from nnik.machine.data import exact_targets
+
+        start_mm = origin_mm[None, :]
+        exact = exact_targets(scn, np.concatenate([start_mm, ends_mm]))
+        rounded = np.floor(exact + 0.5)
+        out["rounding_um"] = _stats(path_dist_um(units_to_mm(scn, rounded[1:]), seg_move, plan.moves, origin_mm))
+        t = (np.arange(1, CHORD_SAMPLES) / CHORD_SAMPLES)[None, :, None]
+        q = exact[:-1, None, :] + t * (exact[1:, None, :] - exact[:-1, None, :])  # (S, k, 2)
+        p = units_to_mm(scn, q.reshape(-1, 2))
+        chord = path_dist_um(p, np.repeat(seg_move, CHORD_SAMPLES - 1), plan.moves, origin_mm)
+        out["chord_um"] = _stats(chord)
+    return out

@@ -1,0 +1,45 @@
+"""The G-code engine's C compiled for the host (gcc, UBSan + ASan) with a model's IK: a fast
+check of nnik_gcode.c against the Python model without a simulator."""
+
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+from nnik.errors import NnikError
+from nnik.targets.toolchain import HARNESS_DIR
+from nnik.targets.host import HOST_FLAGS
+
+DRIVER = HARNESS_DIR / "arduino" / "nnik_gcode_host.c"
+
+
+def run_engine_host(libdir: Path, name: str, lines: list[str], cc: str = "gcc") -> dict:
+    """{"start": steps (2,), "segments": (S, 5) d0 d1 ticks x y, "replies": [...]} for the lines."""
+    if shutil.which(cc) is None:
+        raise NnikError(f"host C compiler {cc!r} not found")
+    src = Path(libdir) / "src"
+    with tempfile.TemporaryDirectory() as tmp:
+        exe = Path(tmp) / "engine"
+        cmd = [cc, *HOST_FLAGS, f"-I{src}", str(DRIVER), str(src / "nnik_gcode.c"), str(src / f"{name}.c"), "-o", str(exe)]
+        r = subprocess.run(cmd, capture_output=True, text=True)
+        if r.returncode != 0:
+            raise NnikError(f"host build of the G-code engine failed: {r.stderr.strip()[:300]}")
+        data = "".join(f"{ln}\n" for ln in lines).encode("latin-1")
+        run = subprocess.run([str(exe)], input=data, capture_output=True, env=dict(os.environ, ASAN_OPTIONS="detect_leaks=0"))
+    if run.returncode != 0:
+        raise NnikError(f"host run of the G-code engine failed: {run.stderr.decode(errors='replace')[:300]}")
+    start, segs, replies = None, [], []
+    for line in run.stdout.decode("latin-1").splitlines():
+        tag, _, rest = line.partition(" ")
+        if tag == "I":
+            start = np.array(rest.split(), dtype=np.int64)
+        elif tag == "S":
+            segs.append([int(v) for v in rest.split()])
+        elif tag == "R":
+            replies.append(rest)
+    return {"start": start, "segments": np.asarray(segs, dtype=np.int64).reshape(-1, 5), "replies": replies}

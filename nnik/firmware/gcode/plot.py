@@ -1,0 +1,64 @@
+"""PNG of a job: the programmed path and every reached position coloured by its contour error."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+from nnik.firmware.gcode.contour import move_dist  # noqa: E402
+from nnik.firmware.config import MachineConfig  # noqa: E402
+from nnik.firmware.gcode.motion import Plan  # noqa: E402
+
+
+def _path_points(plan: Plan, cfg: MachineConfig, n: int = 400) -> list[np.ndarray]:
+    """Dense points of each programmed move (mm, machine frame)."""
+    origin = np.asarray(cfg.origin_um) / 1000.0
+    out = []
+    for mv in plan.moves:
+        a, b = np.asarray(mv.start) / 1000.0, np.asarray(mv.end) / 1000.0
+        if mv.kind == "line":
+            t = np.linspace(0, 1, 2)[:, None]
+            out.append(origin + a + t * (b - a))
+            continue
+        c = np.asarray(mv.center) / 1000.0
+        a0 = np.arctan2(*(a - c)[::-1])
+        b0 = np.arctan2(*(b - c)[::-1])
+        sweep = ((b0 - a0) if mv.ccw else (a0 - b0)) % (2 * np.pi) or 2 * np.pi
+        th = a0 + np.linspace(0, sweep, n) * (1 if mv.ccw else -1)
+        out.append(origin + c + mv.radius / 1000.0 * np.stack([np.cos(th), np.sin(th)], 1))
+    return out
+
+
+def job_png(path: Path, title: str, plan: Plan, cfg: MachineConfig, plot: dict) -> Path:
+    """Left: the path (grey) and the reached positions coloured by contour error; right: the
+    contour error over the job's time."""
+    reached_mm, error_um, time_s = plot["reached_mm"], plot["error_um"], plot["time_s"]
+    fig, (ax, ax2) = plt.subplots(1, 2, figsize=(11, 4.8), dpi=100, gridspec_kw={"width_ratios": [1.1, 1]})
+    for pts in _path_points(plan, cfg):
+        ax.plot(pts[:, 0], pts[:, 1], color="0.6", lw=0.8, zorder=1)
+    if len(reached_mm):
+        sc = ax.scatter(reached_mm[:, 0], reached_mm[:, 1], c=error_um, s=5, cmap="viridis", zorder=2)
+        fig.colorbar(sc, ax=ax, label="contour error (µm)")
+        ax2.plot(time_s, error_um, lw=0.7, color="tab:blue")
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.set_xlabel("x (mm)")
+    ax.set_ylabel("y (mm)")
+    ax.set_title("reached positions (exact FK of the step counts)", fontsize=9)
+    ax2.set_xlabel("time (s)")
+    ax2.set_ylabel("contour error (µm)")
+    ax2.set_title("distance to the programmed path after each step", fontsize=9)
+    ax2.grid(alpha=0.3)
+    fig.suptitle(title, fontsize=10)
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path)
+    plt.close(fig)
+    return path
+
+
+__all__ = ["job_png", "move_dist"]

@@ -1,0 +1,161 @@
+"""Static cost of the `poly` family on AVR and PIC18, calibrated against the simulators.
+
+The assembly the generator emits is straight-line code, so its cycles and words are counted
+from the instruction list itself (AVR: MUL*/LDS/STD 2 cycles, the rest 1; PIC18: MOVFF and BRA
+2, a skip-and-branch pair 1.5 on average, the rest 1). What the C around it costs (clamp,
+prologue and the registers the assembly makes avr-gcc save, SDCC's pointer I/O) is a linear
+model in a few counts, fitted by least squares to simavr/gpsim measurements of fixed reference
+configurations. ``nnik/calibration/poly.json`` holds the fit, keyed to the hash of the C those
+references emit; ``validated`` says a separate validation set was predicted within 3 % and the
+references still emit the same C.
+
+    python -m nnik.implementations.poly.calibrate   # re-measure and rewrite the calibration
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import re
+from pathlib import Path
+
+import numpy as np
+
+CALIBRATION = Path(__file__).resolve().parents[2] / "calibration" / "poly.json"
+TOLERANCE = 0.03
+ROOT = Path(__file__).resolve().parents[3]
+
+# (scenario, input unit or None for the scenario's own, config)
+REFERENCE = [
+    ("galvo_cba2012", None, {"degree": 3}),
+    ("galvo_cba2012", None, {"degree": 5}),
+    ("galvo_dual_xy2", None, {"degree": 5, "split": True, "rounding": False}),
+    ("corexy_nonlinear", None, {"degree": 2, "lsb": True, "split": True}),
+    ("hbot_unicamp", None, {"degree": 1, "lsb": True}),
+]
+VALIDATION = [
+    ("galvo_cba2012", None, {"degree": 5, "split": True}),
+    ("galvo_dual_xy2", 1.0, {"degree": 5, "split": [True, False]}),
+    ("galvo_dual_xy2", None, {"degree": 3}),
+    ("corexy_measured", None, {"degree": 2, "lsb": True, "split": True}),
+]
+
+
+# ---- counting the emitted assembly ---------------------------------------------------------------
+
+def _block(src: str, start: str, stop: str) -> list[str]:
+    if start not in src:
+        return []
+    part = src[src.index(start):]
+    return part[:part.index(stop)].splitlines()[1:]
+
+
+def _count(lines: list[str], pattern: str, cycles, words) -> tuple[float, float]:
+    """Cycles and words of the instructions in the string literals `lines` (labels skipped)."""
+    cyc = wds = 0.0
+    for line in lines:
+        m = re.match(pattern, line)
+        if m and not m.group(1).endswith(":"):
+            op = m.group(1).split()[0]
+            cyc += cycles(op)
+            wds += words(op)
+    return cyc, wds
+
+
+def _avr_counts(src: str) -> dict:
+    cyc, words = _count(_block(src, "__asm__ __volatile__ (", '            : "+r"'), r'\s*"(.*)\\n\\t"\s*$',
+                        lambda op: 2 if op in ("mul", "muls", "mulsu", "lds", "std") else (1.5 if op.startswith("br") else 1),
+                        lambda op: 2 if op == "lds" else 1)
+    for k in re.findall(r"_ASR24\((?:x|y), (\d+)\);", src):
+        cyc += 3 * int(k)  # the input shift in C: asr/ror/ror a bit
+        words += 3 * int(k)
+    clob = re.search(r'            : ("r\d+"(?:, "r\d+")*), "memory"', src)
+    pushes = sum(1 for r in re.findall(r'"r(\d+)"', clob.group(1)) if 2 <= int(r) <= 17) if clob else 0
+    return {"asm_cycles": cyc, "asm_words": words, "pushes": pushes}
+
+
+def _p18_counts(src: str) -> dict:
+    cyc, words = _count(_block(src, "    __asm__(", "    );"), r'\s*"(?:\\t)?(.*)\\n"\s*$',
+                        lambda op: 2 if op in ("movff", "bra") else (1.5 if op in ("btfss", "btfsc") else 1),
+                        lambda op: 2 if op == "movff" else 1)
+    return {"asm_cycles": cyc, "asm_words": words}
+
+
+FEATURES = {"avr": ("asm_cycles", "pushes", "lsb"), "pic18": ("asm_cycles", "lsb")}
+FLASH_FEATURES = {"avr": ("asm_words", "pushes", "lsb"), "pic18": ("asm_words", "lsb")}
+
+
+def counts(impl, target: str) -> dict:
+    from nnik.implementations.poly.c import lsb_used
+
+    src = impl.render_source()
+    c = _avr_counts(src) if target == "avr" else _p18_counts(src)
+    c["lsb"] = len(lsb_used(impl.prog))
+    return c
+
+
+# ---- the estimate -----------------------------------------------------------------------------------
+
+_STATE: dict = {}
+
+
+def _calibration() -> dict | None:
+    if "cal" not in _STATE:
+        _STATE["cal"] = json.loads(CALIBRATION.read_text()) if CALIBRATION.exists() else None
+    return _STATE["cal"]
+
+
+def _refs_unchanged(cal: dict, impl_cls) -> bool:
+    """The reference configurations still emit the C the calibration measured."""
+    if "refs_ok" not in _STATE:
+        try:
+            _STATE["refs_ok"] = reference_key(impl_cls) == cal.get("key")
+        except Exception:  # noqa: BLE001 - a scenario that no longer builds means "not validated"
+            _STATE["refs_ok"] = False
+    return _STATE["refs_ok"]
+
+
+def _predict(coef: list[float], c: dict, feats: tuple) -> float:
+    return float(coef[0] + sum(w * c[f] for w, f in zip(coef[1:], feats)))
+
+
+def estimate(impl, target: str) -> dict:
+    from nnik.errors import NnikError
+
+    if target not in FEATURES:
+        raise NnikError(f"unknown target {target!r} (avr | pic18)")
+    cal = _calibration()
+    c = counts(impl, target)
+    if cal is None:
+        return {"cycles": c["asm_cycles"], "flash_bytes": int(2 * c["asm_words"]), "ram_bytes": 0,
+                "validated": False}
+    t = cal["targets"][target]
+    cyc = _predict(t["cycles"], c, FEATURES[target])
+    flash = _predict(t["flash"], c, FLASH_FEATURES[target])
+    ram = 0 if target == "avr" else 24 + 2 * len(impl.prog.steps)
+    return {"cycles": cyc, "flash_bytes": int(round(flash)), "ram_bytes": ram,
+            "validated": bool(cal.get("validated")) and _refs_unchanged(cal, type(impl))}
+
+
+# ---- the reference configurations (the calibration's key) ---------------------------------------
+
+def reference_impl(impl_cls, scn_name: str, unit, config: dict):
+    """One reference configuration fitted by ``impl_cls`` (PolyImpl; passed in, so this module
+    does not import the family it serves)."""
+    from nnik.machine.data import build_dataset
+    from nnik.implementations.problem import Problem
+    from nnik.machine.scenario import load_scenario
+
+    key = (scn_name, unit)
+    if key not in _STATE.setdefault("problems", {}):
+        scn = load_scenario(ROOT / "datasets" / f"{scn_name}.toml")
+        _STATE["problems"][key] = Problem(scn, build_dataset(scn), unit_um=unit or scn.export.get("input_unit_um", 1.0))
+    return impl_cls.fit(_STATE["problems"][key], config)
+
+
+def reference_key(impl_cls) -> str:
+    """Hash of the C the reference configurations emit: the calibration holds while it matches."""
+    h = hashlib.sha256()
+    for name, unit, cfg in REFERENCE:
+        h.update(reference_impl(impl_cls, name, unit, cfg).render_source().encode())
+    return h.hexdigest()[:16]

@@ -1,0 +1,70 @@
+"""The G-code firmware on the simulated Uno, built once per session for every test that runs it."""
+
+from __future__ import annotations
+
+import os
+
+import numpy as np
+import pytest
+
+from nnik import pipeline
+from nnik.firmware.arduino import export_arduino
+from nnik.firmware.gcode import chip
+from nnik.firmware.ik_oracle import ik_oracle
+from tests.conftest import require_tool
+
+# the motion pin falls in the last tick's interrupt, within this many cycles of the point where
+# the segment marker toggled in its first tick's interrupt (one tick is 1600 cycles)
+IDLE_SLACK_CYCLES = 200
+
+
+def require_chip() -> None:
+    """Skip without avr-gcc, simavr and the Arduino core (fail under NNIK_REQUIRE_TOOLCHAINS=1)."""
+    for tool in ("avr-gcc", "avr-g++", "simavr"):
+        require_tool(tool)
+    why = chip.tool_missing_reason()
+    if why:
+        if os.environ.get("NNIK_REQUIRE_TOOLCHAINS") == "1":
+            pytest.fail(why)
+        pytest.skip(why)
+
+
+@pytest.fixture(scope="session")
+def firmware(galvo_run, corexy_run, tmp_path_factory):
+    """Per scenario: (model dir, library info, the built G-code firmware, the IK oracle, build dir)."""
+    require_chip()
+    out = {}
+    for name, run in (("galvo_cba2012", galvo_run), ("corexy_nonlinear", corexy_run)):
+        pipeline.export(run)
+        work = tmp_path_factory.mktemp(name)
+        lib = export_arduino(run, work / "lib")
+        fw = chip.build_sketch(work / "lib", f"{name}_gcode", work / "build")
+        out[name] = (run, lib, fw, ik_oracle(run), work / "build")
+    return out
+
+
+def run_both(entry, lines: list[str]):
+    """The lines through the Python model and the simulated chip: (plan, segments, chip run), with
+    the chip's answers, segments and every step checked against the model's, and the run's end
+    checked to fall when the last segment's last tick is over, however the job ends."""
+    from nnik.firmware.gcode.job import CLOCK_HZ
+    from nnik.firmware.gcode.motion import interpret, plan_steps
+    from nnik.firmware.gcode.steps import chip_events, model_events
+
+    _, lib, fw, ik, work = entry
+    cfg = lib["machine"]
+    plan = interpret(lines, cfg)
+    seg = plan_steps(plan, cfg, ik)
+    res = chip.run_firmware(fw, lines, work, 2.0 + 1.5 * seg.ticks.sum() / cfg.tick_hz)
+    assert res.state == "done"
+    assert [t for _, t in res.replies if not t.startswith("nnik ")] == plan.replies
+    assert len(res.marks) == len(seg.ticks)
+    tick = CLOCK_HZ // cfg.tick_hz
+    got, want = chip_events(res.steps, res.marks, tick), model_events(seg)
+    assert got.shape == want.shape and np.array_equal(got, want)
+    if len(seg.ticks):
+        last_tick = int(res.marks[-1]) + (int(seg.ticks[-1]) - 1) * tick  # the interrupt of its last tick
+        assert abs(res.idle_cycle - last_tick) < IDLE_SLACK_CYCLES, res.idle_cycle - last_tick
+    else:
+        assert res.idle_cycle == 0
+    return plan, seg, res

@@ -1,0 +1,41 @@
+"""Jobs however they end, and R-form arcs, on the simulated Uno: every segment runs (the harness
+waits until the machine is idle, not for the answer to the last line), every step equals the
+Python model's, and the run ends when the last tick is over."""
+
+from __future__ import annotations
+
+import pytest
+
+from tests.firmware.gcode.conftest import run_both
+
+MACHINES = ["galvo_cba2012", "corexy_nonlinear"]
+
+# a five-pointed star, I/J and R arcs (short and long, both directions), no M400 at the end
+STAR_ARCS = ["G21 G90 F6000", "G0 X0 Y5", "G1 X2.939 Y-4.045", "X-4.755 Y1.545", "X4.755 Y1.545",
+             "X-2.939 Y-4.045", "X0 Y5", "G2 X5 Y0 I0 J-5", "G3 X0 Y-5 R5", "G2 X-5 Y0 R-5",
+             "G91 G3 X5 Y5 R5", "G90 G2 X0 Y-3 R-4.5"]
+
+
+@pytest.mark.parametrize("scenario", MACHINES)
+def test_one_line_without_m400_runs_all_its_segments(firmware, scenario):
+    plan, seg, res = run_both(firmware[scenario], ["G1 X2 F3000"])
+    assert len(res.marks) == len(seg.ticks) == 4  # 2 mm in 0.5 mm segments
+
+
+@pytest.mark.parametrize("scenario", MACHINES)
+@pytest.mark.parametrize("ending", [[], ["M2"], ["M30"], ["M400"]])
+def test_star_and_arcs_match_however_the_job_ends(firmware, scenario, ending):
+    plan, seg, res = run_both(firmware[scenario], STAR_ARCS + ending)
+    assert plan.replies == ["ok"] * len(STAR_ARCS + ending)
+    arcs = [m for m in plan.moves if m.kind == "arc"]
+    assert len(arcs) == 5 and len(seg.ticks) > 150
+
+
+def test_bad_r_arcs_get_the_same_error_on_the_chip(firmware):
+    lines = ["G1 X1 F3000", "G2 X10 R2", "G2 X1 Y2 I1 R1", "G1 X2 R1", "G3 X1 R0", "G2 R3", "G3 X3 R-1",
+             "G2 X2 Y1 R-1"]
+    plan, _, _ = run_both(firmware["corexy_nonlinear"], lines)
+    assert plan.replies[1:6] == ["error: line 2: arc chord longer than 2|R|", "error: line 3: arc with both R and I/J",
+                                 "error: line 4: R needs G2 or G3", "error: line 5: arc radius is zero",
+                                 "error: line 6: R arc ends at its start"]
+    assert plan.replies[6:] == ["ok", "ok"]

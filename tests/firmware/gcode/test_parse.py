@@ -1,0 +1,53 @@
+"""The G-code parser: numbers to whole micrometres and the firmware's error texts."""
+
+from __future__ import annotations
+
+import pytest
+
+from nnik.firmware.gcode.parse import GcodeLineError, Num, parse_line, split_lines
+
+
+def um(text: str, inch: bool = False) -> int:
+    return parse_line(f"X{text}").values["X"].to_um(inch)
+
+
+@pytest.mark.parametrize("text, inch, want", [
+    ("10", False, 10000), ("-2.351", False, -2351), ("0.0005", False, 1), ("-0.0005", False, -1),
+    ("0.00049", False, 0), (".5", False, 500), ("+3.", False, 3000), ("9999.99999", False, 10000000),
+    ("1", True, 25400), ("0.0025", True, 64), ("-0.0025", True, -64), ("0.00001", True, 0),
+])
+def test_numbers_round_half_away_from_zero(text, inch, want):
+    assert um(text, inch) == want
+
+
+def test_words_modes_and_comments():
+    w = parse_line("n10 g91 G20 (inch, relative) g2 x1 y-2 i3 j4 f100 ; done")
+    assert (w.motion, w.inch, w.relative, w.wait) == (2, True, True, False)
+    assert sorted(w.values) == ["F", "I", "J", "X", "Y"]
+    assert parse_line("M400").wait and parse_line("").values == {}
+    assert Num(False, True, 1, 5, 1).to_um(False) == 1500
+
+
+@pytest.mark.parametrize("line, msg", [
+    ("G1 Z5", "unsupported word Z"),
+    ("G4 P1", "unsupported G4"),
+    ("M3", "unsupported M3"),
+    ("G1.5 X1", "G needs a whole number"),
+    ("G1 X", "bad number after X"),
+    ("G1 X-.", "bad number after X"),
+    ("G1 X10000", "number too large after X"),
+    ("G1 X1.123456", "too many decimals after X"),
+    ("G1 X1 X2", "repeated word X"),
+    ("G0 G1 X1", "two motion commands"),
+    ("G1 X1 (open", "unterminated comment"),
+    ("G1 X1 #", "unexpected character"),
+    ("X" + "1" * 95, "line too long"),
+])
+def test_errors_name_the_problem(line, msg):
+    with pytest.raises(GcodeLineError) as e:
+        parse_line(line)
+    assert str(e.value) == msg
+
+
+def test_split_lines_keeps_bytes_and_drops_the_last_newline():
+    assert split_lines(b"G1 X1\r\n\nG1 Y\xe9\n") == ["G1 X1\r", "", "G1 Y\xe9"]
