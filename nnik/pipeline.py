@@ -153,7 +153,7 @@ def _truth_for_um(scn, in_um: np.ndarray, fallback_q: np.ndarray) -> np.ndarray:
 
 def quantize_kernel(model: TrainedModel, ds: Dataset, kernel: str):
     """The scenario's integer model for one kernel ("fast" or "portable")."""
-    from nnik.implementations.mlp import fixedpoint as fx
+    from nnik.implementations.mlp import quantize as fx
 
     scn = model.scenario
     tanh = None if scn.export["tanh"] == "default" else scn.export["tanh"]
@@ -170,7 +170,7 @@ def export(outdir: Path):
     comparison, OUTDIR/c/mlp/<other kernel>/NAME.{h,c}, and the baselines in OUTDIR/c/;
     returns both integer models (scenario's kernel first). Nothing is written unless every
     file was generated and the range analysis held (see nnik.files.atomic_write)."""
-    from nnik.implementations.mlp import fixedpoint as fx
+    from nnik.implementations.mlp import quantize as fx
     from nnik.files.atomic_write import Staged
     from nnik.implementations.mlp.export import render_model_c
 
@@ -213,19 +213,20 @@ def mlp_flash_bytes(im) -> int:
 
 def _export_baselines(scn, im, ds, staged, in_um: np.ndarray, truth: np.ndarray) -> dict:
     """Stage c/NAME_float.{h,c} (where a closed form exists) and c/NAME_lut.{h,c}; their accuracy."""
-    from nnik.targets import baselines as bl
+    from nnik.targets import float_ik
+    from nnik.implementations.lut import baseline as lut_baseline
 
     out: dict = {}
-    reason = bl.float_unavailable_reason(scn)
+    reason = float_ik.float_unavailable_reason(scn)
     if reason is None:
-        staged.add(bl.render_float_c(scn), C_DIR)
+        staged.add(float_ik.render_float_c(scn), C_DIR)
         out["float"] = {"available": True, "file": f"{scn.name}_float.c"}
     else:
         out["float"] = {"available": False, "reason": reason}
     budget = scn.export["lut_bytes"] or mlp_flash_bytes(im)
-    lut = bl.build_lut(scn, budget, ds.p["train"], ds.q["train"])
-    staged.add(bl.render_lut_c(lut), C_DIR)
-    acc = bl.lut_accuracy(lut, in_um, truth)
+    lut = lut_baseline.build_lut(scn, budget, ds.p["train"], ds.q["train"])
+    staged.add(lut_baseline.render_lut_c(lut), C_DIR)
+    acc = lut_baseline.lut_accuracy(lut, in_um, truth)
     out["lut"] = {"available": True, "file": f"{scn.name}_lut.c", "budget_bytes": int(budget),
                   "flash_bytes": int(lut.flash_bytes), "grid": acc["grid"], "origin": lut.origin,
                   **acc["out"], "pre_max_abs": acc["pre"]["max_abs"], "pre_rms": acc["pre"]["rms"]}
@@ -235,16 +236,16 @@ def _export_baselines(scn, im, ds, staged, in_um: np.ndarray, truth: np.ndarray)
 def _verify_baselines_host(outdir: Path, bmetrics: dict, ds: Dataset, inputs: dict) -> dict:
     """Run the baselines' C on the host: the LUT must match its integer model bit for bit; the
     float IK's delivered error is measured against the exact IK (libm is not bit-reproducible)."""
-    from nnik.targets import baselines as bl
+    from nnik.implementations.lut import baseline as lut_baseline
     from nnik.targets.host import run_host_driver
 
     model = TrainedModel.load(outdir / MODEL_FILE)
     scn = model.scenario
     c_dir = outdir / C_DIR
     pts = np.concatenate(list(inputs.values()))
-    lut = bl.build_lut(scn, bmetrics["lut"]["budget_bytes"], ds.p["train"], ds.q["train"])
+    lut = lut_baseline.build_lut(scn, bmetrics["lut"]["budget_bytes"], ds.p["train"], ds.q["train"])
     c = run_host_driver(c_dir, f"{scn.name}_lut", pts)
-    out, flags, _ = bl.lut_int(lut, pts)
+    out, flags, _ = lut_baseline.lut_int(lut, pts)
     bad = np.any(c["out"] != out, axis=1) | (c["flags"] != flags)
     bmetrics["lut"]["host"] = {"points": int(len(pts)), "mismatches": int(bad.sum()), "bit_exact": bool(not bad.any())}
     if bmetrics["float"]["available"]:
@@ -257,7 +258,7 @@ def _verify_baselines_host(outdir: Path, bmetrics: dict, ds: Dataset, inputs: di
 
 def verify(outdir: Path, target: str = "host"):
     """Run the generated C on a target and compare it bit for bit with the integer model."""
-    from nnik.targets.host import verification_inputs, verify_host
+    from nnik.implementations.mlp.host import verification_inputs, verify_host
 
     if target in TARGET_OPTS:
         return verify_target(outdir, target)
@@ -321,7 +322,7 @@ def estimate_row(im, target: str, measured: dict | None = None) -> dict:
 
 def verify_target(outdir: Path, target: str) -> dict:
     """Run the MLP (each compiler setting), the float IK and the LUT in the same harness."""
-    from nnik.targets import baselines as bl
+    from nnik.implementations.lut import baseline as lut_baseline
     from nnik.targets import TargetError, available, run_on_target
 
     ok, reason = available(target)
@@ -367,9 +368,9 @@ def verify_target(outdir: Path, target: str) -> dict:
         base["float"] = _target_row(r, truth, r["outputs"], inside)
     else:
         base["float"] = {"not_run": metrics["baselines"]["float"]["reason"]}
-    lut = bl.build_lut(scn, metrics["baselines"]["lut"]["budget_bytes"], ds.p["train"], ds.q["train"])
+    lut = lut_baseline.build_lut(scn, metrics["baselines"]["lut"]["budget_bytes"], ds.p["train"], ds.q["train"])
     r = run(f"{scn.name}_lut", TARGET_OPTS[target][0])
-    lut_out, lut_flags, _ = bl.lut_int(lut, vec)
+    lut_out, lut_flags, _ = lut_baseline.lut_int(lut, vec)
     lut_bad = int((np.any(r["outputs"] != lut_out, axis=1) | (r["flags"] != lut_flags)).sum())
     base["lut"] = {**_target_row(r, truth, r["outputs"], inside), "mismatches": lut_bad, "bit_exact": lut_bad == 0}
     # each artefact's own row says whether it is bit-exact: the MLP kernels here, the LUT in base

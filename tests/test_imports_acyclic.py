@@ -109,3 +109,114 @@ def test_prediction_does_not_reach_the_pipeline():
 
 def test_fastc_does_not_import_export():
     assert "nnik.implementations.mlp.export" not in import_graph()["nnik.implementations.mlp.fastc"]
+
+
+# ---- layers: nnik/ imports only downward ----------------------------------------------------------
+#
+# A room is a top-level module or package of nnik/, with three splits: each implementation family's
+# folder is a room of its own ("implementations.<family>", minus its family.py), the families'
+# interface (the registry nnik.implementations and every <family>/family.py) is the room
+# "implementations", and the estimator's calibration tools (which train through the pipeline)
+# are "estimate.tools". Rooms stand on layers, from the ground up; a module imports only from its
+# own layer or below (lazy imports count, as above):
+LAYERS = (
+    ("errors", "emit", "files"),  # errors; jinja environment, C text helpers; outdir, atomic writes, hashes, pick state
+    ("machine",),  # scenario, params, actuator, domain, data, synth, kinematics, reference
+    ("targets",),  # toolchains, simulators, sizes, the host build, the float IK (speed reference)
+    # what the families are made of: the shared contract (base, problem, verify, accuracy,
+    # c_common, avr_asm) and each family's fit, integer model, C, fast paths and cost
+    ("implementations.shared", "implementations.mlp", "implementations.poly", "implementations.lut",
+     "implementations.hybrid"),
+    ("estimate",),  # the MLP's cost model: it predicts cycles from the C the MLP emits
+    ("implementations",),  # the families as the pipeline sees them: <family>/family.py and the registry
+    ("selection",),
+    ("pipeline",),
+    ("search", "firmware"),
+    ("report",),
+    ("cli",),  # cli.py and __main__.py (python -m nnik)
+    ("bench", "estimate.tools"),
+)
+# Known upward edges, each with its reason. Nothing else may import upward.
+UPWARD_ALLOWED = {
+    # [export] tanh is checked when the scenario file is read, against the MLP's tanh variants
+    ("nnik.machine.scenario", "nnik.implementations.mlp.tanh"),
+}
+FAMILY_FOLDERS = ("mlp", "poly", "lut", "hybrid")
+ESTIMATE_TOOLS = ("sweep", "calibrate", "measure", "search_check", "__main__")
+
+
+def room(mod: str) -> str:
+    parts = mod.split(".")[1:]
+    if not parts:
+        return "errors"  # nnik/__init__: imports nothing of its own
+    if parts == ["__main__"]:
+        return "cli"  # python -m nnik: the CLI's entry
+    if parts[0] == "implementations":
+        if len(parts) == 1 or parts[-1] in ("family", "calibrate"):  # calibrate runs its family end to end
+            return "implementations"
+        if parts[1] in FAMILY_FOLDERS or (len(parts) > 2 and (NNIK / "implementations" / parts[1]).is_dir()):
+            return f"implementations.{parts[1]}"
+        return "implementations.shared"
+    if parts[0] == "estimate" and len(parts) > 1 and parts[1] in ESTIMATE_TOOLS:
+        return "estimate.tools"
+    return parts[0]
+
+
+def layer(mod: str) -> int:
+    r = room(mod)
+    for i, rooms in enumerate(LAYERS):
+        if r in rooms:
+            return i
+    raise AssertionError(f"{mod}: room {r!r} is on no layer (add it to LAYERS)")
+
+
+def room_graph(graph: dict[str, set[str]]) -> dict[str, set[str]]:
+    rooms: dict[str, set[str]] = {}
+    for a, bs in graph.items():
+        rooms.setdefault(room(a), set())
+        for b in bs:
+            if room(a) != room(b) and (a, b) not in UPWARD_ALLOWED:
+                rooms[room(a)].add(room(b))
+    return rooms
+
+
+def levels(graph: dict[str, set[str]]) -> int:
+    """The longest import chain, counted in nodes (an acyclic graph)."""
+    memo: dict[str, int] = {}
+
+    def depth(v: str) -> int:
+        if v not in memo:
+            memo[v] = 1 + max((depth(w) for w in graph.get(v, ())), default=0)
+        return memo[v]
+
+    return max(depth(v) for v in graph)
+
+
+def test_layers_only_import_downward():
+    graph = import_graph()
+    up = sorted(f"{a} (layer {layer(a)} {room(a)}) -> {b} (layer {layer(b)} {room(b)})"
+                for a, bs in graph.items() for b in bs if layer(b) > layer(a) and (a, b) not in UPWARD_ALLOWED)
+    assert not up, "imports that go up a layer:\n" + "\n".join(up)
+    stale = [e for e in UPWARD_ALLOWED if e[1] not in graph.get(e[0], ())]
+    assert not stale, f"UPWARD_ALLOWED lists edges that no longer exist: {stale}"
+
+
+def test_rooms_have_no_circle_and_at_most_12_levels():
+    rooms = room_graph(import_graph())
+    cycle = find_cycle(rooms)
+    assert cycle is None, " -> ".join(cycle)
+    assert levels(rooms) <= 12, levels(rooms)
+
+
+def test_the_top_of_nnik_is_small_and_no_module_is_long():
+    top = [p.name for p in NNIK.glob("*.py")]
+    assert len(top) <= 10, sorted(top)
+    long = {str(p.relative_to(NNIK)): n for p in NNIK.rglob("*.py") if (n := len(p.read_text().splitlines())) > 500}
+    assert not long, long
+
+
+def test_the_layer_check_sees_an_upward_import():
+    graph = {k: set(v) for k, v in import_graph().items()}
+    graph["nnik.machine.data"].add("nnik.pipeline")
+    assert any(layer(b) > layer(a) for a, bs in graph.items() for b in bs if (a, b) not in UPWARD_ALLOWED)
+    assert find_cycle(room_graph(graph)) is not None

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import shutil
 from functools import lru_cache
 from pathlib import Path
 
@@ -10,6 +11,7 @@ import jinja2
 CODEGEN = Path(__file__).resolve().parents[2] / "codegen"
 TEMPLATES = CODEGEN / "templates"
 RUNTIME = CODEGEN / "runtime"
+RUNTIME_HEADERS = ("nnik_flash.h", "nnik_kernel.h")  # copied next to every generated file
 
 
 @lru_cache(maxsize=1)
@@ -21,3 +23,16 @@ def environment() -> jinja2.Environment:
         lstrip_blocks=True,
         keep_trailing_newline=True,
     )
+
+
+def write_sources(files: dict[str, str], outdir: Path) -> list[Path]:
+    """Write generated files plus the runtime headers they include; returns the paths."""
+    outdir.mkdir(parents=True, exist_ok=True)
+    paths = []
+    for fname, text in files.items():
+        p = outdir / fname
+        p.write_text(text)
+        paths.append(p)
+    for header in RUNTIME_HEADERS:
+        shutil.copy(RUNTIME / header, outdir / header)
+    return paths

@@ -5,7 +5,8 @@ from __future__ import annotations
 from pathlib import Path
 
 from nnik.implementations.mlp import kernel as kmod
-from nnik.implementations.mlp.export import render_model_c, write_sources
+from nnik.emit.templating import write_sources
+from nnik.implementations.mlp.export import render_model_c
 from nnik.emit.templating import RUNTIME
 from nnik.estimate.calibrations import DEFAULT_KERNEL_KEY
 

@@ -207,7 +207,7 @@ def load_integer_model(path: Path, tanh: str | None = None, weight_bits: int | N
                        kernel: str | None = None):
     """The IntegerModel of a trained model: OUTDIR (with model.pt, data.npz) or a model.pt,
     quantised as `nnik` exports it (the scenario's [export] tanh, weight_bits and kernel)."""
-    from nnik.implementations.mlp import fixedpoint as fx
+    from nnik.implementations.mlp import quantize as fx
     from nnik.machine.data import Dataset
     from nnik.implementations.mlp.train import TrainedModel
 

@@ -31,7 +31,7 @@ def _arch_label(hidden: Sequence[int], n_in: int = 2, n_out: int = 2) -> str:
 def sweep_model(hidden: tuple[int, ...], tanh: str | None, cache: Path = SWEEP_DIR, train_seconds: float = 3.0,
                 kernel: str | None = None):
     """A galvo_cba2012 network of the given hidden sizes, trained briefly (cached), quantised."""
-    from nnik.implementations.mlp import fixedpoint as fx
+    from nnik.implementations.mlp import quantize as fx
     from nnik import pipeline
     from nnik.machine.data import Dataset
     from nnik.machine.scenario import load_scenario

@@ -127,10 +127,10 @@ def _scenario(family: str):
 
 def synthetic_model(spec: CalSpec, kernel: str | None = None):
     """An IntegerModel with random weights of the given shape and format knobs (quantised by
-    the real nnik.implementations.mlp.fixedpoint.quantize, so it is a valid model of the current generator)."""
+    the real nnik.implementations.mlp.quantize.quantize, so it is a valid model of the current generator)."""
     import torch
 
-    from nnik.implementations.mlp import fixedpoint as fx
+    from nnik.implementations.mlp import quantize as fx
     from nnik.machine.data import Dataset, exact_targets, sample_points
     from nnik.implementations.mlp.train import MLP, TrainedModel, make_scaling
 

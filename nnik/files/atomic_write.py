@@ -50,7 +50,7 @@ class Staged:
 
     def add(self, files: dict[str, str], subdir: str | Path = ".", runtime_headers: bool = True) -> None:
         """Generated sources for root/subdir, plus the runtime headers they include."""
-        from nnik.implementations.mlp.export import RUNTIME, RUNTIME_HEADERS
+        from nnik.emit.templating import RUNTIME, RUNTIME_HEADERS
 
         d = Path(subdir)
         for name, text in files.items():

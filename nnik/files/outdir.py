@@ -8,6 +8,8 @@ from pathlib import Path
 
 from nnik.errors import NnikError
 
+JOB_DIR = "job"  # OUTDIR/job/: what `nnik job` leaves (the report embeds it)
+
 
 def _nearest_existing(path: Path) -> Path:
     p = path.absolute()

@@ -17,7 +17,7 @@ def picked_implementation(outdir: Path):
     Commands that deliver firmware call ``pick_state.require_deliverable`` first, so for them the
     None cases never get here; the fallback to the MLP below serves the library's own tests."""
     from nnik.files import pick_state
-    from nnik.files.pick_verify import pick_implementation
+    from nnik.firmware.pick_verify import pick_implementation
 
     st = pick_state.status(Path(outdir))
     if st.state == "none" or (st.marker or {}).get("input_unit_um", 1.0) != 1.0:

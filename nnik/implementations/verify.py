@@ -18,7 +18,7 @@ HOST_RANDOM = 20_000
 def _write(impl: Implementation, c_dir: Path, write: bool = True) -> str | None:
     """Write the implementation's C into c_dir (or, with ``write=False``, leave the files there
     as they are); returns the hash of the C that will run."""
-    from nnik.implementations.mlp.export import write_sources
+    from nnik.emit.templating import write_sources
 
     if not write:
         return dir_hash(c_dir, impl.problem.name)

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import shutil
 
-from nnik.firmware.gcode.report_section import JOB_HEADER, job_section_png
+from nnik.report.job_section import JOB_HEADER, job_section_png
 from nnik.report.document import Fig, Section, Table, txt
 
 PNG_PREFIX = "job_"

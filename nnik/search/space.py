@@ -8,8 +8,6 @@ parameters to the family's ``fit(problem, config)`` configuration.
 
 from __future__ import annotations
 
-import dataclasses
-
 from nnik.implementations import Problem
 from nnik.implementations.lut.family import LutImpl, cell_ladder, k_for_nodes, table_budget
 from nnik.implementations.lut.table import dependence
@@ -19,17 +17,6 @@ MLP_WIDTHS = (3, 4, 5, 6, 8, 10, 12)
 MLP_TANH = ("default", "lerp32", "lerp64", "lerp_mr", "lerp_mr4", "minimax3_x11", "minimax2_x22", "paper_lsq5")
 SPLITS = {"none": False, "x": [True, False], "y": [False, True], "both": True}
 MIN_NODES = 3
-# a trial's MLP trains on a small budget so that it takes seconds (the scenario's own network keeps
-# the budget `nnik run` trained it with)
-FAST_TRAINING = {"adam_steps": 400, "lbfgs_rounds": 40, "restarts": 1, "patience": 15, "max_seconds": 20.0}
-
-
-def fast_problem(problem: Problem) -> Problem:
-    """The problem, changed in place to a small MLP training budget (its check set and its cache,
-    with the scenario's trained model, kept)."""
-    scn = problem.scn
-    problem.scn = dataclasses.replace(scn, training={**scn.training, **FAST_TRAINING})
-    return problem
 
 
 def k_range(span: int, max_nodes: int) -> tuple[int, int]:

@@ -33,7 +33,8 @@ from nnik.implementations import FAMILIES
 from nnik.implementations.accuracy import accuracy
 from nnik.implementations.base import TARGETS
 from nnik.search.front import config_key, verify_front
-from nnik.search.space import fast_problem, params_of, suggest
+from nnik.implementations.mlp.family import fast_problem
+from nnik.search.space import params_of, suggest
 from nnik.search.storage import open_storage, open_study, storage_kind
 
 SEED = 20261123

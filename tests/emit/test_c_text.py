@@ -80,7 +80,8 @@ def test_longest_name_builds_on_pic18(tmp_path):
 @pytest.mark.parametrize("text", INJECTIONS[:2])
 def test_mlp_c_keeps_an_injected_path_inside_its_comment(tmp_path, galvo_run, kernel, text):
     """The scenario path goes into the MLP's generated C (both kernels): it must stay a comment."""
-    from nnik.implementations.mlp.export import render_model_c, write_sources
+    from nnik.emit.templating import write_sources
+    from nnik.implementations.mlp.export import render_model_c
 
     require_tool("gcc")
     model, ds = pipeline.load_pair(galvo_run)

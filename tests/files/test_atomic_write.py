@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from nnik.implementations.mlp import fixedpoint as fx
+from nnik.implementations.mlp import quantize as fx
 from nnik import pipeline
 from nnik.files.atomic_write import Staged
 from nnik.errors import NnikError

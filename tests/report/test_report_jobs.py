@@ -5,7 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from nnik.firmware.gcode.job import run_job
-from nnik.firmware.gcode.summary import JOB_HEADER
+from nnik.report.job_summary import JOB_HEADER
 from nnik.report import write_report
 from tests.bad_input import copy_run, tiny_run  # noqa: F401 (fixture)
 from tests.report.test_report import parse

@@ -213,7 +213,7 @@ def test_an_mlp_front_point_runs_on_avr_and_not_through_sdcc(galvo_run, tmp_path
     require_tool("simavr")
     from nnik import selection as sel
     from nnik.search.study import _candidate
-    from nnik.search.space import fast_problem
+    from nnik.implementations.mlp.family import fast_problem
 
     out = _copy_run(galvo_run, tmp_path / "m")
     problem = fast_problem(pipeline.problem_for(out))

@@ -16,9 +16,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from nnik.implementations.mlp import fixedpoint as fx
+from nnik.implementations.mlp import quantize as fx
 from nnik.machine.data import Dataset
-from nnik.implementations.mlp.export import render_model_c, write_sources
+from nnik.emit.templating import write_sources
+from nnik.implementations.mlp.export import render_model_c
 from nnik.targets import run_on_target
 from tests.targets.runner_helpers import need_toolchain
 from nnik.implementations.mlp.train import TrainedModel

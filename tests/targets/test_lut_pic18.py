@@ -6,9 +6,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from nnik.targets import baselines as bl
+from nnik.implementations.lut import baseline as lut_baseline
 from nnik.machine.data import build_dataset
-from nnik.implementations.mlp.export import write_sources
+from nnik.emit.templating import write_sources
 from nnik.machine.scenario import load_scenario
 from tests.conftest import DATASETS
 from tests.targets.runner_helpers import need_toolchain
@@ -21,14 +21,14 @@ def test_lut_bit_exact_on_gpsim(tmp_path, name, budget):
     need_toolchain("pic18")
     scn = load_scenario(DATASETS / f"{name}.toml")
     ds = build_dataset(scn)
-    lut = bl.build_lut(scn, budget, ds.p["train"], ds.q["train"])
-    write_sources(bl.render_lut_c(lut), tmp_path)
+    lut = lut_baseline.build_lut(scn, budget, ds.p["train"], ds.q["train"])
+    write_sources(lut_baseline.render_lut_c(lut), tmp_path)
     rng = np.random.default_rng(1)
     span = np.array(lut.hi_um) - np.array(lut.lo_um)
     vec = np.concatenate([np.rint(ds.p["test"][:200] * 1000),
                           rng.uniform(np.array(lut.lo_um) - span / 4, np.array(lut.hi_um) + span / 4, (56, 2))])
     vec = vec.astype(np.int64)
-    want, flags, _ = bl.lut_int(lut, vec)
+    want, flags, _ = lut_baseline.lut_int(lut, vec)
     r = run_on_target(target="pic18", sources=[tmp_path / f"{name}_lut.c"], include_dirs=[tmp_path],
                       name=f"{name}_lut", vectors=vec, workdir=tmp_path / "t", progress=False)
     bad = np.any(r["outputs"] != want, axis=1) | (r["flags"] != flags)

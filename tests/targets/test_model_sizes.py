@@ -9,9 +9,9 @@ import subprocess
 import numpy as np
 import pytest
 
-from nnik.targets import baselines as bl
+from nnik.implementations.lut import baseline as lut_baseline
 from nnik.machine.data import build_dataset
-from nnik.implementations.mlp.export import write_sources
+from nnik.emit.templating import write_sources
 from nnik.machine.scenario import load_scenario
 from nnik.targets.pic18 import parse_map
 from nnik.targets.pic18_sizes import parse_detail
@@ -25,7 +25,7 @@ def lut_c(tmp_path_factory):
     d = tmp_path_factory.mktemp("lut")
     scn = load_scenario(DATASETS / "galvo_cba2012.toml")
     ds = build_dataset(scn)
-    write_sources(bl.render_lut_c(bl.build_lut(scn, 572, ds.p["train"], ds.q["train"])), d)
+    write_sources(lut_baseline.render_lut_c(lut_baseline.build_lut(scn, 572, ds.p["train"], ds.q["train"])), d)
     return d / "galvo_cba2012_lut.c"
 
 

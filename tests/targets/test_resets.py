@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from nnik.targets import baselines as bl
-from nnik.implementations.mlp.export import write_sources
+from nnik.targets import float_ik
+from nnik.emit.templating import write_sources
 from nnik.machine.scenario import load_scenario
 from nnik.targets import TargetError
 from nnik.targets.pic18 import parse_gpsim_output
@@ -21,7 +21,7 @@ def test_long_batch_runs_without_a_watchdog_reset(tmp_path):
 
     need_toolchain("pic18")
     scn = load_scenario(DATASETS / "galvo_cba2012.toml")
-    write_sources(bl.render_float_c(scn), tmp_path)
+    write_sources(float_ik.render_float_c(scn), tmp_path)
     src = tmp_path / "galvo_cba2012_float.c"
     vec = np.random.default_rng(0).integers(-100000, 100001, (300, 2))
     one = run_on_target(target="pic18", sources=[src], include_dirs=[tmp_path], name=src.stem, vectors=vec,

@@ -13,6 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
+from nnik.files.outdir import JOB_DIR
 from nnik.errors import NnikError
 from nnik.firmware.gcode.contour import contour_report
 from nnik.firmware.config import MachineConfig
@@ -22,7 +23,6 @@ from nnik.firmware.gcode.parse import split_lines
 from nnik.firmware.gcode.plot import job_png
 from nnik.firmware.gcode.steps import chip_events, model_events
 
-JOB_DIR = "job"
 CPU_SHARE = 0.5  # of the chip for segment preparation; the rest steps, talks and waits
 CLOCK_HZ = 16_000_000
 

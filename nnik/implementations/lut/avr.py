@@ -250,7 +250,7 @@ def saved_registers(lines: list[str]) -> int:
 
 
 def wrap(lines: list[str], tabsym: str) -> str:
-    from nnik.implementations.mlp.fastc_avr import asm_statement
+    from nnik.emit.avr_asm import asm_statement
 
     return "\n".join([*asm_statement(lines, f'[tab] "i" ({tabsym})', clobbers(lines)), "    return flag;"])
 

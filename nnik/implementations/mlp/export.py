@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import shutil
 from pathlib import Path
 
 import numpy as np
@@ -11,12 +10,9 @@ from nnik.implementations.mlp import tanh as activations
 from nnik.emit.c_text import c_comment_safe
 from nnik.implementations.mlp import fastc
 from nnik.implementations.mlp import kernel as kern
-from nnik.emit.templating import RUNTIME, environment
+from nnik.emit.templating import environment
 from nnik.errors import NnikError
 from nnik.implementations.mlp.fixedpoint import ACT_FRAC, IntegerModel
-
-RUNTIME_HEADERS = ("nnik_flash.h", "nnik_kernel.h")  # copied next to every generated file
-
 
 def c_list(values, per_line: int = 10, suffix: str = "") -> str:
     vals = [f"{int(v)}{suffix}" for v in np.asarray(values).ravel()]
@@ -57,14 +53,3 @@ def render_model_c(im: IntegerModel, scenario_source: str, kernel: str | None = 
             f"{im.name}.c": env.get_template("model.c.j2").render(**ctx)}
 
 
-def write_sources(files: dict[str, str], outdir: Path) -> list[Path]:
-    """Write generated files plus the runtime header they include; returns the paths."""
-    outdir.mkdir(parents=True, exist_ok=True)
-    paths = []
-    for fname, text in files.items():
-        p = outdir / fname
-        p.write_text(text)
-        paths.append(p)
-    for header in RUNTIME_HEADERS:
-        shutil.copy(RUNTIME / header, outdir / header)
-    return paths

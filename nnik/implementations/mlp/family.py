@@ -55,6 +55,19 @@ def _in_units(problem: Problem, model):
     return moved, (pts / 1000.0, q)
 
 
+# a search trial's MLP trains on a small budget so that it takes seconds (the scenario's own network keeps
+# the budget `nnik run` trained it with)
+FAST_TRAINING = {"adam_steps": 400, "lbfgs_rounds": 40, "restarts": 1, "patience": 15, "max_seconds": 20.0}
+
+
+def fast_problem(problem: Problem) -> Problem:
+    """The problem, changed in place to a small MLP training budget (its check set and its cache,
+    with the scenario's trained model, kept)."""
+    scn = problem.scn
+    problem.scn = dataclasses.replace(scn, training={**scn.training, **FAST_TRAINING})
+    return problem
+
+
 class MlpImpl(Implementation):
     family = "mlp"
     doc = "tanh MLP, fixed point, fast hardware-multiply kernel or portable C"
@@ -79,7 +92,7 @@ class MlpImpl(Implementation):
 
     @classmethod
     def fit(cls, problem: Problem, config: dict) -> "MlpImpl":
-        from nnik.implementations.mlp import fixedpoint as fx
+        from nnik.implementations.mlp import quantize as fx
 
         key = _model_key(config)
         model = problem.cache.get(key)

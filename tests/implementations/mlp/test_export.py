@@ -9,12 +9,13 @@ import subprocess
 import numpy as np
 import pytest
 
-from nnik.implementations.mlp import fixedpoint as fx
+from nnik.implementations.mlp import quantize as fx
 from nnik import pipeline
 from nnik.machine.data import Dataset
-from nnik.implementations.mlp.export import render_model_c, write_sources
+from nnik.emit.templating import write_sources
+from nnik.implementations.mlp.export import render_model_c
 from nnik.implementations.mlp.train import TrainedModel
-from nnik.targets.host import run_host, verification_inputs, verify_host
+from nnik.implementations.mlp.host import run_host, verification_inputs, verify_host
 from tests.conftest import require_tool
 
 

@@ -27,7 +27,7 @@ def refit(outdir: Path, family: str, config: dict, model_hash: str | None, sourc
             raise NnikError(f"unknown implementation family {family!r} in the recorded selection", str(outdir))
         problem = pipeline.problem_for(Path(outdir))
         if source == "search":  # the search fits an MLP on its own small training budget
-            from nnik.search.space import fast_problem
+            from nnik.implementations.mlp.family import fast_problem
 
             problem = fast_problem(problem)
         impl = FAMILIES[family].fit(problem, config)

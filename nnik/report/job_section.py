@@ -1,7 +1,7 @@
 """The report's G-code job section: what `nnik job` left in OUTDIR/job/, ready to embed.
 
 Hook: the report calls job_section_png(outdir) and, when the list is not empty, shows each
-"png" with its "caption" (and may tabulate "row" under JOB_HEADER from nnik.firmware.gcode.summary).
+"png" with its "caption" (and may tabulate "row" under JOB_HEADER from nnik.report.job_summary).
 """
 
 from __future__ import annotations
@@ -9,8 +9,8 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-from nnik.firmware.gcode.job import JOB_DIR
-from nnik.firmware.gcode.summary import JOB_HEADER, job_row
+from nnik.files.outdir import JOB_DIR
+from nnik.report.job_summary import JOB_HEADER, job_row
 
 
 def job_section_png(outdir: Path) -> list[dict]:

@@ -11,7 +11,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from nnik.targets import baselines as bl
+from nnik.targets import float_ik
+
+from nnik.implementations.lut import baseline as lut_baseline
 from nnik.machine.data import build_dataset, exact_targets
 from nnik.machine.domain import clamp_um, domain_um
 from nnik.machine.scenario import load_scenario
@@ -44,9 +46,9 @@ def dataset(name):
 def lut_for(name, budget):
     scn = scenario(name)
     if scn.mechanism.analytic:
-        return bl.build_lut(scn, budget)
+        return lut_baseline.build_lut(scn, budget)
     ds = dataset(name)
-    return bl.build_lut(scn, budget, ds.p["train"], ds.q["train"])
+    return lut_baseline.build_lut(scn, budget, ds.p["train"], ds.q["train"])
 
 
 def truth_units(scn, in_um):
@@ -126,22 +128,22 @@ needs_gcc = pytest.mark.skipif(shutil.which("gcc") is None, reason="host gcc not
 
 def test_float_availability():
     for name in FLOAT_OK:
-        assert bl.float_unavailable_reason(scenario(name)) is None
-        files = bl.render_float_c(scenario(name))
+        assert float_ik.float_unavailable_reason(scenario(name)) is None
+        files = float_ik.render_float_c(scenario(name))
         assert set(files) == {f"{name}_float.h", f"{name}_float.c"}
         assert f"int8_t {name}_float_ik(const int32_t in_um[{name}_float_N_IN]" in files[f"{name}_float.h"]
         assert f"#define {name}_float_N_OUT 2" in files[f"{name}_float.h"]
-    assert bl.render_float_c(scenario("corexy_nonlinear")) is None
-    assert "no closed-form inverse with nonlinear distortion" in bl.float_unavailable_reason(scenario("corexy_nonlinear"))
-    assert bl.render_float_c(scenario("corexy_measured")) is None
-    assert "measured" in bl.float_unavailable_reason(scenario("corexy_measured"))
+    assert float_ik.render_float_c(scenario("corexy_nonlinear")) is None
+    assert "no closed-form inverse with nonlinear distortion" in float_ik.float_unavailable_reason(scenario("corexy_nonlinear"))
+    assert float_ik.render_float_c(scenario("corexy_measured")) is None
+    assert "measured" in float_ik.float_unavailable_reason(scenario("corexy_measured"))
 
 
 @pytest.mark.parametrize("name", FLOAT_OK)
 def test_float_reference_within_one_unit(name):
     scn = scenario(name)
     x = probe_inputs(scn)
-    out, flags = bl.float_ik_reference(scn, x)
+    out, flags = float_ik.float_ik_reference(scn, x)
     q = truth_units(scn, x)
     assert np.abs(out - q).max() < 0.5 + 0.05
     np.testing.assert_array_equal(flags, clamp_um(x, scn.workspace)[1])
@@ -151,12 +153,12 @@ def test_float_reference_within_one_unit(name):
 @pytest.mark.parametrize("name", FLOAT_OK)
 def test_float_c_within_one_unit_of_exact(name, tmp_path):
     scn = scenario(name)
-    exe = compile_host(tmp_path, bl.render_float_c(scn), f"{name}_float_ik", f"{name}_float.h")
+    exe = compile_host(tmp_path, float_ik.render_float_c(scn), f"{name}_float_ik", f"{name}_float.h")
     x = probe_inputs(scn)
     out, flags = run_driver(exe, x)
     q = truth_units(scn, x)
     err = np.abs(out - q)
-    ref, _ = bl.float_ik_reference(scn, x)
+    ref, _ = float_ik.float_ik_reference(scn, x)
     print(f"\n{name}: float C vs exact IK, max |out - exact| = {err.max():.4f} {scn.unit} "
           f"(0.5 is the rounding); differs from the float32 reference in {np.count_nonzero(out != ref)} "
           f"of {len(x)} points")
@@ -185,13 +187,13 @@ def test_lut_fits_budget_and_model_is_sane(name, budget):
         end = lut.node_um[a][-1]
         assert hi[a] - lo[a] <= end <= (hi[a] - lo[a]) * (1 + 2e-4) + 1
     x = probe_inputs(scn, lut)
-    out, flags, pre = bl.lut_int(lut, x)
+    out, flags, pre = lut_baseline.lut_int(lut, x)
     np.testing.assert_array_equal(flags, clamp_um(x, scn.workspace)[1])
     np.testing.assert_array_equal(out, np.floor(pre + 0.5).astype(np.int64) if lut.code_range is None
                                   else np.clip(np.floor(pre + 0.5), *lut.code_range).astype(np.int64))
     # the pre-rounding value is the float bilinear table up to the Q15 position quantisation
     c, _ = clamp_um(x, scn.workspace)
-    lf = bl.lut_float(lut, c / 1000.0)
+    lf = lut_baseline.lut_float(lut, c / 1000.0)
     dec = lut.offset + lut.table * 2.0 ** -np.array(lut.k)
     dx = np.abs(np.diff(dec, axis=1)).max()
     dy = np.abs(np.diff(dec, axis=0)).max()
@@ -216,14 +218,14 @@ def test_lut_int32_entries_when_int16_cannot_hold_the_range(tmp_path):
     p = tmp_path / "g20.toml"
     p.write_text(text)
     scn = load_scenario(p)
-    lut = bl.build_lut(scn, 512)
+    lut = lut_baseline.build_lut(scn, 512)
     assert lut.entry_bits == 32 and lut.wbits < 15 and lut.flash_bytes <= 512
     if shutil.which("gcc") is None:
         pytest.skip("host gcc not installed")
-    exe = compile_host(tmp_path, bl.render_lut_c(lut, "g20"), "g20_lut_ik", "g20_lut.h")
+    exe = compile_host(tmp_path, lut_baseline.render_lut_c(lut, "g20"), "g20_lut_ik", "g20_lut.h")
     x = probe_inputs(scn, lut, n_random=4000)
     out, flags = run_driver(exe, x)
-    want, wflags, _ = bl.lut_int(lut, x)
+    want, wflags, _ = lut_baseline.lut_int(lut, x)
     assert np.count_nonzero(out != want) == 0
     np.testing.assert_array_equal(flags, wflags)
 
@@ -237,11 +239,11 @@ def test_lut_int32_entries_when_int16_cannot_hold_the_range(tmp_path):
 def test_lut_c_matches_python_model_bit_for_bit(name, budget, tmp_path):
     scn = scenario(name)
     lut = lut_for(name, budget)
-    exe = compile_host(tmp_path, bl.render_lut_c(lut), f"{name}_lut_ik", f"{name}_lut.h")
+    exe = compile_host(tmp_path, lut_baseline.render_lut_c(lut), f"{name}_lut_ik", f"{name}_lut.h")
     x = probe_inputs(scn, lut)
     assert len(x) >= 20000
     out, flags = run_driver(exe, x)
-    want, wflags, _ = bl.lut_int(lut, x)
+    want, wflags, _ = lut_baseline.lut_int(lut, x)
     mismatches = int(np.count_nonzero(np.any(out != want, axis=1)))
     assert mismatches == 0, f"{mismatches} mismatches, first at {x[np.any(out != want, axis=1)][:3]}"
     np.testing.assert_array_equal(flags, wflags)
@@ -266,7 +268,7 @@ def test_lut_accuracy_reported(name):
     res = {}
     for budget in BUDGETS:
         lut = lut_for(name, budget)
-        acc = bl.lut_accuracy(lut, x, q)
+        acc = lut_baseline.lut_accuracy(lut, x, q)
         res[budget] = acc
         o, p = acc["out"], acc["pre"]
         print(f"{name} LUT {budget:5d} B ({lut.nx}x{lut.ny}, {lut.flash_bytes} B): "
@@ -286,7 +288,7 @@ def test_measured_lut_beats_affine_on_held_out_rows():
     ds = dataset("corexy_measured")
     x, q = _test_truth("corexy_measured")
     aff = LinearRegression().fit(ds.p["train"], ds.q["train"]).predict(ds.p["test"])
-    lut_err = bl.lut_accuracy(lut_for("corexy_measured", 1024), x, q)["out"]["max_abs"]
+    lut_err = lut_baseline.lut_accuracy(lut_for("corexy_measured", 1024), x, q)["out"]["max_abs"]
     assert max(lut_err) < np.abs(aff - q).max() / 5
     assert "cross-validation" in lut_for("corexy_measured", 1024).origin
 
@@ -295,7 +297,7 @@ def test_build_lut_rejects_tiny_budget():
     from nnik.errors import NnikError
 
     with pytest.raises(NnikError, match="budget"):
-        bl.build_lut(scenario("galvo_cba2012"), 15)
+        lut_baseline.build_lut(scenario("galvo_cba2012"), 15)
 
 
 # ---------------------------------------------------------------- AVR
@@ -306,7 +308,7 @@ def test_compiles_warning_free_with_avr_gcc(kind, tmp_path):
     cc = avr_gcc()
     for name in ALL:
         scn = scenario(name)
-        files = bl.render_float_c(scn) if kind == "float" else bl.render_lut_c(lut_for(name, 1024))
+        files = float_ik.render_float_c(scn) if kind == "float" else lut_baseline.render_lut_c(lut_for(name, 1024))
         if files is None:
             continue
         for k, v in files.items():
