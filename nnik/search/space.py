@@ -13,6 +13,8 @@ from nnik.implementations.lut.family import LutImpl, cell_ladder, k_for_nodes, t
 from nnik.implementations.lut.table import dependence
 from nnik.implementations.poly.family import MAX_DEGREE
 
+# the families whose knobs this space samples (a new family is searched once its knobs are added here)
+SEARCHED = ("mlp", "poly", "lut", "hybrid")
 MLP_WIDTHS = (3, 4, 5, 6, 8, 10, 12)
 MLP_TANH = ("default", "lerp32", "lerp64", "lerp_mr", "lerp_mr4", "minimax3_x11", "minimax2_x22", "paper_lsq5")
 SPLITS = {"none": False, "x": [True, False], "y": [False, True], "both": True}

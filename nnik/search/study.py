@@ -34,7 +34,7 @@ from nnik.implementations.accuracy import accuracy
 from nnik.implementations.base import TARGETS
 from nnik.search.front import config_key, verify_front
 from nnik.implementations.mlp.family import fast_problem
-from nnik.search.space import params_of, suggest
+from nnik.search.space import SEARCHED, params_of, suggest
 from nnik.search.storage import open_storage, open_study, storage_kind
 
 SEED = 20261123
@@ -207,10 +207,14 @@ def search(outdir: Path, trials: int, url: str | None = None, name: str | None =
     import optuna
 
     optuna.logging.set_verbosity(optuna.logging.WARNING)
-    fams = list(families or FAMILIES)
+    fams = list(families or [f for f in FAMILIES if f in SEARCHED])
     bad = [f for f in fams if f not in FAMILIES]
     if bad:
         raise NnikError(f"unknown implementation family {bad[0]!r} (known: {', '.join(FAMILIES)})")
+    bad = [f for f in fams if f not in SEARCHED]
+    if bad:
+        raise NnikError(f"family {bad[0]!r} has no knobs in the search space (nnik/search/space.py); "
+                        f"searched: {', '.join(SEARCHED)}")
     scn = pipeline.load_pair(outdir)[0].scenario
     name = name or study_name(scn)
     storage = open_storage(url, outdir)  # bad URL, unreachable server, other scenario: fail before any work

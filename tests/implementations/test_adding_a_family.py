@@ -47,3 +47,13 @@ def test_the_registry_names_every_family_by_its_module():
         assert module == f"nnik.implementations.{name}.family" and load_family(module) is FAMILIES[name]
     with pytest.raises(AttributeError):
         load_family("nnik.implementations.base")  # a module without IMPLEMENTATION is no family
+
+
+def test_the_search_leaves_a_family_without_knobs_out_and_says_so(affine, tmp_path):
+    from nnik.errors import NnikError
+    from nnik.search.space import SEARCHED
+    from nnik.search.study import search
+
+    assert "affine" not in SEARCHED  # its knobs are not in nnik/search/space.py: `nnik search` skips it
+    with pytest.raises(NnikError, match="no knobs in the search space"):
+        search(tmp_path, trials=1, families=["affine"], progress=False)
