@@ -252,17 +252,28 @@ def trial_counts(study, before: set[int], mine: set[str], target: int) -> dict:
             "trials_target": target}
 
 
+def ladder_bests(problem, families: list[str]) -> list[tuple[str, dict]]:
+    """Each family's best on the ladder for the problem's [target] (what `nnik run` picks from):
+    the cheapest configuration that meets max_error, else the most accurate."""
+    target = problem.scn.target
+    cands = sel.fit_ladder(problem, families, max_error=target["max_error"])
+    return [(fam, c.config) for fam, c in sel.family_bests(cands, target).items()]
+
+
 def warm(study, outdir: Path, families: list[str]) -> int:
-    """Queue every family's ladder (what `nnik run` tries) as the new study's first trials, so the
-    search starts from the ladder's points and can only improve on them; returns how many."""
+    """Queue each family's ladder best first, then every family's ladder, as the new study's first
+    trials: even a search of a few trials evaluates what `nnik run` would pick from, so it never
+    returns worse than the ladder, and can only improve on it; returns how many were queued."""
     from itertools import chain, zip_longest
 
     problem = pipeline.problem_for(outdir)
+    bests = [params_of(fam, cfg) for fam, cfg in ladder_bests(problem, families)]
     ladders = [[params_of(fam, cfg) for cfg in FAMILIES[fam].ladder(problem)] for fam in families]
     n = 0
-    for p in chain.from_iterable(zip_longest(*ladders)):  # the families in turn: a short search sees each
+    # the bests, then the families in turn: a short search sees each
+    for p in chain(bests, chain.from_iterable(zip_longest(*ladders))):
         if p is not None:
-            study.enqueue_trial(p, skip_if_exists=True)
+            study.enqueue_trial(p, skip_if_exists=True)  # a best is also on its ladder: queued once
             n += 1
     return n
 
