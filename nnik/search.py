@@ -163,9 +163,9 @@ def run_worker(outdir: str, url: str | None, name: str, n_total: int, families: 
     callbacks = [MaxTrialsCallback(n_total, states=(TrialState.COMPLETE, TrialState.PRUNED, TrialState.FAIL))]
     bar = None
     if progress:
-        from tqdm import tqdm
+        from nnik.progress import bar as progress_bar
 
-        bar = tqdm(total=n_total, initial=done, desc="search", unit="trial", leave=False)
+        bar = progress_bar(total=n_total, initial=done, desc="search", unit="trial", leave=False)
 
         def show(study_, _trial):
             bar.n = min(n_total, len(_finished(study_)))
@@ -337,7 +337,7 @@ def finish(outdir: Path, study, url: str | None, info: dict, progress: bool = Tr
     """Refit the front, verify each family's cheapest point on it (full checks) and the rest of the
     front that meets max_error (fast path), pick, export, write metrics."""
     from optuna.trial import TrialState
-    from tqdm import tqdm
+    from nnik.progress import bar
 
     problem = fast_problem(pipeline.problem_for(outdir))
     target = problem.scn.target
@@ -353,12 +353,12 @@ def finish(outdir: Path, study, url: str | None, info: dict, progress: bool = Tr
         if fam not in fams:
             chosen.append(min((t for t in comp if t.user_attrs["family"] == fam), key=lambda t: t.values[0]))
     cands = [_candidate(problem, t.user_attrs["family"], t.user_attrs["config"])
-             for t in tqdm(chosen, desc="refit the front", unit="config", disable=not progress, leave=False)]
+             for t in bar(chosen, desc="refit the front", unit="config", disable=not progress, leave=False)]
     bests = sel.family_bests([c for c in cands if c.impl is not None], target)
     reachable = any(c.meets(target["max_error"]) for c in cands)
     c_dir = outdir / pipeline.C_DIR
     if reachable:  # only the points that meet max_error: a large MLP that misses takes minutes on gpsim
-        for c in tqdm([c for c in bests.values() if c.meets(target["max_error"])], desc="verify family bests",
+        for c in bar([c for c in bests.values() if c.meets(target["max_error"])], desc="verify family bests",
                       unit="family", disable=not progress, leave=False):
             sel.verify_candidate(c, c_dir / sel.ALT_DIR / c.family, (outdir / "targets" / "families").resolve())
     rows = front_rows(front, target)
