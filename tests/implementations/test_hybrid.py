@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from lut_helpers import host_check, problem
+from tests.implementations.lut_helpers import host_check, problem
 
 from nnik.errors import NnikError
 from nnik.implementations import FAMILIES
@@ -14,7 +14,7 @@ from nnik.implementations.hybrid import HybridImpl
 from nnik.implementations.lut import LutImpl
 from nnik.implementations.verify import verify_on_target
 
-from conftest import require_tool
+from tests.conftest import require_tool
 
 COREXY = {"k": [14, 14], "bits": 16, "W": 16, "fit": "minimax"}
 GALVO = {"k": [12, 12], "bits": 16, "W": 8, "coef_bits": 8}  # folded in x and y, alpha 1-D

@@ -7,7 +7,7 @@ import re
 
 import numpy as np
 import pytest
-from lut_helpers import c_function_body, centred_corexy, host_check, host_vectors, problem, problem_from
+from tests.implementations.lut_helpers import c_function_body, centred_corexy, host_check, host_vectors, problem, problem_from
 
 from nnik.errors import NnikError
 from nnik.implementations import FAMILIES
@@ -16,7 +16,7 @@ from nnik.implementations.lut import LutImpl
 from nnik.implementations.lut_table import detect_dependence, detect_parity
 from nnik.implementations.verify import verify_host, verify_on_target
 
-from conftest import DATASETS, require_tool, write_toml
+from tests.conftest import DATASETS, require_tool, write_toml
 
 GALVO_K14 = {"k": [14, 14], "bits": 16, "W": 16, "fit": "lsq", "symmetry": True}
 

@@ -8,7 +8,7 @@ import json
 
 import numpy as np
 import pytest
-from lut_helpers import centred_corexy, host_vectors, problem, problem_from
+from tests.implementations.lut_helpers import centred_corexy, host_vectors, problem, problem_from
 
 from nnik.errors import NnikError
 from nnik.implementations import FAMILIES
@@ -18,7 +18,7 @@ from nnik.implementations import poly_fit
 from nnik.implementations.poly_fit import NO_SYMMETRY, detect_symmetry
 from nnik.implementations.verify import verify_host, verify_on_target
 
-from conftest import DATASETS, require_tool, write_toml
+from tests.conftest import DATASETS, require_tool, write_toml
 
 CBA5 = {"degree": 5}
 DUAL5 = {"degree": 5, "split": True, "rounding": False}
