@@ -434,7 +434,7 @@ def select(outdir: Path, progress: bool = True, families=None, target: dict | No
     """Fit every family's ladder, verify each family's best (host, avr, pic18), export the pick as
     c/NAME.{c,h} and every family's best as c/alt/<family>/; metrics["selection"]. ``target``
     overrides the scenario's [target] table (keys as there)."""
-    from tqdm import tqdm
+    from nnik.progress import bar
 
     from nnik import selection as sel
 
@@ -444,12 +444,12 @@ def select(outdir: Path, progress: bool = True, families=None, target: dict | No
     if target.get("max_error") != problem.scn.target.get("max_error"):
         target["max_error_source"] = "command line"
     pick_state.invalidate(outdir)  # c/NAME.c and c/alt/ are about to change
-    cands = sel.fit_ladder(problem, families, progress=(lambda **k: tqdm(leave=False, **k)) if progress else None,
+    cands = sel.fit_ladder(problem, families, progress=(lambda **k: bar(leave=False, **k)) if progress else None,
                            max_error=target["max_error"])
     bests = sel.family_bests(cands, target)
     # every family's best is verified and written to c/alt/, whether or not one meets the target
     c_dir = outdir / C_DIR
-    for c in tqdm(list(bests.values()), desc="verify family bests", unit="family", disable=not progress, leave=False):
+    for c in bar(list(bests.values()), desc="verify family bests", unit="family", disable=not progress, leave=False):
         sel.verify_candidate(c, c_dir / sel.ALT_DIR / c.family, (outdir / "targets" / "families").resolve())
     pick = sel.choose(bests, target)
     asked = "max_error" in (problem.scn.raw.get("target") or {}) or "max_error" in (overrides or {})

@@ -39,3 +39,20 @@ def test_run_end_to_end(tmp_path, capsys):
         assert chips[target][1].startswith(f"{pick['cycles'][target]:.0f} cycles")
         assert f"flash {pick['flash_bytes'][target]} B" in chips[target][2]
         assert chips[f"mlp on {target}"][1].startswith(f"{m['targets'][target]['cycles']:.0f} cycles")
+
+
+def test_no_progress_bars_in_a_log(tmp_path):
+    """Issue 16: with stderr not a terminal (a log, a pipe, CI), training writes no carriage-return
+    bar updates, so an error line can never land on a bar's line."""
+    import subprocess
+    import sys
+
+    text = (DATASETS / "galvo_cba2012.toml").read_text().replace("n_test = 20000", "n_test = 300")
+    text = text.replace("max_seconds = 60", "max_seconds = 20\nrestarts = 2\nadam_steps = 200\nlbfgs_rounds = 5")
+    toml = write_toml(tmp_path, text)
+    out = tmp_path / "out"
+    for cmd in (["generate", toml, "-o", out], ["train", toml, "-o", out]):
+        r = subprocess.run([sys.executable, "-m", "nnik", *map(str, cmd)], capture_output=True, text=True, timeout=600)
+        assert r.returncode == 0, r.stderr
+        assert "\r" not in r.stdout + r.stderr
+    assert (out / "model.pt").is_file()

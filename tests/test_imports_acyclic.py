@@ -120,7 +120,8 @@ def test_fastc_does_not_import_export():
 # are "estimate.tools". Rooms stand on layers, from the ground up; a module imports only from its
 # own layer or below (lazy imports count, as above):
 LAYERS = (
-    ("errors", "emit", "files"),  # errors; jinja environment, C text helpers; outdir, atomic writes, hashes, pick state
+    ("errors", "progress", "emit", "files"),  # errors; progress bars (on a terminal only); jinja environment,
+    # C text helpers, the AVR asm statement; outdir, atomic writes, hashes, pick state
     ("machine",),  # scenario, params, actuator, domain, data, synth, kinematics, reference
     ("targets",),  # toolchains, simulators, sizes, the host build, the float IK (speed reference)
     # what the families are made of: the shared contract (base, problem, verify, accuracy,

@@ -40,7 +40,7 @@ def _pick_rows(metrics: dict, unit: str) -> list[tuple[str, ...]]:
     if pick:
         rows.append(("pick (c/NAME.c)", f"{pick['family']}: max {fmt(pick.get('pre_max'), D_UNIT)} {unit} pre-rounding",
                      f"{pick.get('describe')}; {fmt(lookup(pick, 'cycles', chip), D_CYC)} cycles, "
-                     f"{lookup(pick, 'flash_bytes', chip)} B on {chip} (target {tg.get('max_error')} {unit})"))
+                     f"{fmt(lookup(pick, 'flash_bytes', chip), D_CYC)} B on {chip} (target {tg.get('max_error')} {unit})"))
         for t in target_names(metrics):
             tm = (pick.get("targets") or {}).get(t)
             ok = isinstance(tm, dict) and "not_run" not in tm

@@ -39,7 +39,7 @@ def verify_front(outdir: Path, rows: list[dict], cands: dict, bests: dict, targe
     """Verify the front rows in place (cheapest first, as they come); ``cands`` maps config_key to
     the refitted selection.Candidate, ``bests`` family -> Candidate (already verified where it meets
     max_error). Returns the summary that goes beside the front in metrics["search"]."""
-    from tqdm import tqdm
+    from nnik.progress import bar
 
     t0 = time.perf_counter()
     outdir = Path(outdir)
@@ -65,7 +65,7 @@ def verify_front(outdir: Path, rows: list[dict], cands: dict, bests: dict, targe
                 _record(r, c.checks, alt_dir / r["family"], outdir)  # the family's best: already verified
             else:
                 todo.append((r, c))
-    for r, c in tqdm(todo, desc="verify the front", unit="point", disable=not progress, leave=False):
+    for r, c in bar(todo, desc="verify the front", unit="point", disable=not progress, leave=False):
         work = outdir / FRONT_DIR / f"{r['family']}_{r['trial']:04d}"
         checks = {"host": verify_host(c.impl, work / "c")}
         for t in TARGETS:

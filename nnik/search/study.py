@@ -166,9 +166,9 @@ def run_worker(outdir: str, url: str | None, name: str, n_total: int, families: 
     callbacks = [MaxTrialsCallback(n_total, states=(TrialState.COMPLETE, TrialState.PRUNED, TrialState.FAIL))]
     bar = None
     if progress:
-        from tqdm import tqdm
+        from nnik.progress import bar as progress_bar
 
-        bar = tqdm(total=n_total, initial=done, desc="search", unit="trial", leave=False)
+        bar = progress_bar(total=n_total, initial=done, desc="search", unit="trial", leave=False)
 
         def show(study_, _trial):
             bar.n = min(n_total, len(_finished(study_)))
@@ -259,17 +259,28 @@ def trial_counts(study, before: set[int], mine: set[str], target: int) -> dict:
             "trials_target": target}
 
 
+def ladder_bests(problem, families: list[str]) -> list[tuple[str, dict]]:
+    """Each family's best on the ladder for the problem's [target] (what `nnik run` picks from):
+    the cheapest configuration that meets max_error, else the most accurate."""
+    target = problem.scn.target
+    cands = sel.fit_ladder(problem, families, max_error=target["max_error"])
+    return [(fam, c.config) for fam, c in sel.family_bests(cands, target).items()]
+
+
 def warm(study, outdir: Path, families: list[str]) -> int:
-    """Queue every family's ladder (what `nnik run` tries) as the new study's first trials, so the
-    search starts from the ladder's points and can only improve on them; returns how many."""
+    """Queue each family's ladder best first, then every family's ladder, as the new study's first
+    trials: even a search of a few trials evaluates what `nnik run` would pick from, so it never
+    returns worse than the ladder, and can only improve on it; returns how many were queued."""
     from itertools import chain, zip_longest
 
     problem = pipeline.problem_for(outdir)
+    bests = [params_of(fam, cfg) for fam, cfg in ladder_bests(problem, families)]
     ladders = [[params_of(fam, cfg) for cfg in FAMILIES[fam].ladder(problem)] for fam in families]
     n = 0
-    for p in chain.from_iterable(zip_longest(*ladders)):  # the families in turn: a short search sees each
+    # the bests, then the families in turn: a short search sees each
+    for p in chain(bests, chain.from_iterable(zip_longest(*ladders))):
         if p is not None:
-            study.enqueue_trial(p, skip_if_exists=True)
+            study.enqueue_trial(p, skip_if_exists=True)  # a best is also on its ladder: queued once
             n += 1
     return n
 
@@ -333,7 +344,7 @@ def finish(outdir: Path, study, url: str | None, info: dict, progress: bool = Tr
     """Refit the front, verify each family's cheapest point on it (full checks) and the rest of the
     front that meets max_error (fast path), pick, export, write metrics."""
     from optuna.trial import TrialState
-    from tqdm import tqdm
+    from nnik.progress import bar
 
     problem = fast_problem(pipeline.problem_for(outdir))
     target = problem.scn.target
@@ -349,12 +360,12 @@ def finish(outdir: Path, study, url: str | None, info: dict, progress: bool = Tr
         if fam not in fams:
             chosen.append(min((t for t in comp if t.user_attrs["family"] == fam), key=lambda t: t.values[0]))
     cands = [_candidate(problem, t.user_attrs["family"], t.user_attrs["config"])
-             for t in tqdm(chosen, desc="refit the front", unit="config", disable=not progress, leave=False)]
+             for t in bar(chosen, desc="refit the front", unit="config", disable=not progress, leave=False)]
     bests = sel.family_bests([c for c in cands if c.impl is not None], target)
     reachable = any(c.meets(target["max_error"]) for c in cands)
     c_dir = outdir / pipeline.C_DIR
     if reachable:  # only the points that meet max_error: a large MLP that misses takes minutes on gpsim
-        for c in tqdm([c for c in bests.values() if c.meets(target["max_error"])], desc="verify family bests",
+        for c in bar([c for c in bests.values() if c.meets(target["max_error"])], desc="verify family bests",
                       unit="family", disable=not progress, leave=False):
             sel.verify_candidate(c, c_dir / sel.ALT_DIR / c.family, (outdir / "targets" / "families").resolve())
     rows = front_rows(front, target)

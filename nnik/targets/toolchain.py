@@ -190,24 +190,10 @@ def to_int32(u: int) -> int:
 
 
 def progress_bar(total: int, desc: str, enabled: Optional[bool]):
-    """tqdm bar if tqdm is installed (auto-disabled when stderr is not a terminal)."""
-    try:
-        from tqdm import tqdm
-    except ImportError:  # pragma: no cover
-        tqdm = None
-    if tqdm is None or enabled is False:
-        class _Null:
-            def update(self, n=1):
-                pass
+    """A bar over simulator vectors: on a terminal unless `enabled` is False (nnik.progress)."""
+    from nnik.progress import bar
 
-            def close(self):
-                pass
-
-            def set_postfix_str(self, s):
-                pass
-        return _Null()
-    return tqdm(total=total, desc=desc, unit="vec", disable=None if enabled is None else False,
-                leave=False)
+    return bar(total=total, desc=desc, unit="vec", disable=enabled is False, leave=False)
 
 
 def split_batches(n: int, batch_size: int) -> List[Tuple[int, int]]:

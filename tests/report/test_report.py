@@ -326,8 +326,8 @@ def test_full_report_with_lut_winning(galvo_copy, tmp_path):
     rows = summary_rows(m)
     assert all(len(r) == len(report.SUMMARY_HEADER) for r in rows)
     d = {r[0]: r for r in rows}
-    assert d["avr"][1].startswith("1523 cycles = 95.2 µs @ 16 MHz")
-    assert d["pic18"][1:] == ("not run", "toolchain missing")
+    assert d["mlp on avr"][1].startswith("1523 cycles = 95.2 µs @ 16 MHz")
+    assert d["mlp on pic18"][1:] == ("not run", "toolchain missing")
     assert d["LUT baseline"][1] == "wins"
 
 
@@ -354,7 +354,7 @@ def test_target_not_bit_exact_is_flagged(galvo_copy):
     index = write_report(galvo_copy)
     _, text = parse(index)
     assert "NOT bit-exact with the integer model: 3 mismatches" in text
-    assert dict((r[0], r) for r in summary_rows(m))["avr"][2].endswith("NOT bit-exact (3 mismatches)")
+    assert dict((r[0], r) for r in summary_rows(m))["mlp on avr"][2].endswith("NOT bit-exact (3 mismatches)")
 
 
 # --------------------------------------------------------------------------------------------

@@ -140,11 +140,14 @@ def test_journal_resumes_after_sigkill(galvo_run, tmp_path):
     for n, (params, values) in done_before.items():  # nothing completed before the kill was lost
         t = next(t for t in trials if t.number == n)
         assert (t.params, t.values) == (params, values)
-    # a new study starts from the family's ladder (the warm start), in the ladder's order
-    ladder = search.FAMILIES["lut"].ladder(search.pipeline.problem_for(out))
-    firsts = [t for t in finished if t.number < len(ladder)]
-    assert len(firsts) >= len(ladder) - 1  # the killed trial may have been one of them
-    assert all(t.user_attrs["config"] == {**ladder[t.number], "k": list(ladder[t.number]["k"])} for t in firsts)
+    # a new study starts from the family's ladder best (what `nnik run` picks from), then the rest
+    # of its ladder in the ladder's order (the warm start)
+    problem = search.pipeline.problem_for(out)
+    best = search.ladder_bests(problem, ["lut"])[0][1]
+    order = [best] + [c for c in search.FAMILIES["lut"].ladder(problem) if c != best]
+    firsts = [t for t in finished if t.number < len(order)]
+    assert len(firsts) >= len(order) - 1  # the killed trial may have been one of them
+    assert all(t.user_attrs["config"] == {**order[t.number], "k": list(order[t.number]["k"])} for t in firsts)
 
 
 def test_bad_storage_is_one_line(lut_study, capsys):
@@ -244,3 +247,20 @@ def test_search_verifies_the_front_and_picks(galvo_run, tmp_path, capsys):
     assert row["pre_max"] <= tg["max_error"]
     assert (out / "c" / "galvo_cba2012.c").is_file() and sel["pick"]["model_hash"] == row["model_hash"]
     assert len(sel["ladder"]) >= len(front)  # the report's picture shows the front
+
+
+def test_a_short_search_is_never_worse_than_the_ladder(galvo_run, tmp_path, capsys):
+    """Issue 15: the warm start queues each family's ladder best first, so even two trials see what
+    `nnik run` would pick from."""
+    from nnik import selection as sel
+
+    out = _copy_run(galvo_run, tmp_path / "short")
+    assert main(["search", str(out), "--trials", "2", "--families", "lut,poly"]) == 0, capsys.readouterr().err
+    m = search.pipeline.load_metrics(out)
+    tg = m["selection"]["target"]
+    (row,) = [r for r in m["selection"]["implementations"] if r["picked"]]
+    problem = search.pipeline.problem_for(out)
+    bests = sel.family_bests(sel.fit_ladder(problem, ["lut", "poly"], max_error=tg["max_error"]), tg)
+    ladder_cycles = min(c.est[tg["chip"]]["cycles"] for c in bests.values() if c.meets(tg["max_error"]))
+    assert row["pre_max"] <= tg["max_error"]
+    assert row["estimate"][tg["chip"]]["cycles"] <= ladder_cycles + 1e-9

@@ -15,6 +15,12 @@
 #error "NNIK_GC_TICK_HZ above 12 kHz overflows the 32-bit tick count"
 #endif
 
+#if defined(__GNUC__)
+#define NNIK_NOINLINE __attribute__((noinline)) /* a rare path kept out of nnik_gc_line: ~1 KB less on AVR */
+#else
+#define NNIK_NOINLINE
+#endif
+
 #define POS_LIMIT 268435455L /* 2^28 - 1 um: arc sums stay in int32, products in int64 */
 #define MIN_FEED 1000L       /* um per minute */
 #define ARC_STACK 32
@@ -294,11 +300,11 @@ static void arc_to(nnik_gc_t *g, const int32_t c[2], const int32_t end[2], uint3
  * (s = 0 when the chord is longer than 2|rad| by at most the end tolerance), rounded half away
  * from zero, with d = |(x, y)| taken as floor(d * 2^k) / 2^k, 2^29 <= d * 2^k < 2^30: every
  * product stays below 2^61.  The centre lies left of the chord for G3 with a positive R. */
-static const char *r_centre(int32_t x, int32_t y, int32_t rad, int8_t dir, int32_t ij[2])
+NNIK_NOINLINE static const char *r_centre(int32_t x, int32_t y, int32_t rad, int8_t dir, int32_t ij[2])
 {
     uint64_t d2 = sq2(x, y), d2s = d2, r2x4;
     uint32_t ra = (uint32_t)iabs32(rad), s = 0, ds;
-    int64_t xs = x, ys = y;
+    int32_t xs = x, ys = y; /* (x, y) * 2^k: |.| <= d * 2^k < 2^30 */
     if (d2 == 0)
         return M_RFULL;
     r2x4 = 4 * (uint64_t)ra * ra;
@@ -318,8 +324,8 @@ static const char *r_centre(int32_t x, int32_t y, int32_t rad, int8_t dir, int32
         xs = -xs;
         ys = -ys;
     }
-    ij[0] = div_round((int64_t)x * ds - ys * (int64_t)s, 2 * ds);
-    ij[1] = div_round((int64_t)y * ds + xs * (int64_t)s, 2 * ds);
+    ij[0] = div_round(mul_r(x, ds) - mul_r(ys, s), 2 * ds);
+    ij[1] = div_round(mul_r(y, ds) + mul_r(xs, s), 2 * ds);
     return 0;
 }
 

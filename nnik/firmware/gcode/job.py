@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from nnik.files.outdir import JOB_DIR
+from nnik.progress import bar
 from nnik.errors import NnikError
 from nnik.firmware.gcode.contour import contour_report
 from nnik.firmware.config import MachineConfig
@@ -104,7 +105,11 @@ def run_job(outdir: Path, job_path: Path, seg_um: int | None = None, use_chip: b
         except ValueError as exc:
             raise NnikError(str(exc), None, "--seg-um") from None
     lines = read_job(job_path)
+    # a long job shows its stage on a terminal (nothing in a log: nnik.progress)
+    stages = bar(total=3, desc=f"job {job_path.name}", unit="stage", leave=False)
+    stages.set_postfix_str("Python model of the firmware")
     plan, seg, events = python_model(outdir, lines, cfg, str(job_path))
+    stages.update(1)
     res = {"scenario": scn.name, "job": job_path.name, "unit": scn.unit,
            "machine": {"origin_um": list(cfg.origin_um), "seg_um": cfg.seg_um, "tick_hz": cfg.tick_hz},
            **contour_report(scn, cfg, plan, seg, events)}
@@ -115,6 +120,7 @@ def run_job(outdir: Path, job_path: Path, seg_um: int | None = None, use_chip: b
     else:
         if why:
             raise NnikError(f"avr: {why}")
+        stages.set_postfix_str(f"simulated Uno ({res['seconds']:.1f} s of motion)")
         c = chip_run(outdir, lines, cfg, res["seconds"], outdir / JOB_DIR / "work" / job_path.stem)
         ev = c.pop("events")
         run = c.pop("run")
@@ -131,10 +137,14 @@ def run_job(outdir: Path, job_path: Path, seg_um: int | None = None, use_chip: b
             c["cycles_per_segment"] = {"mean": mean, "max": int(busy.max()), "windows": int(len(busy))}
             c["segment_rate_hz"] = {"mean": CPU_SHARE * CLOCK_HZ / mean}
         res["chip"] = c
+    stages.update(1)
+    stages.set_postfix_str("plot")
     out = outdir / JOB_DIR
     out.mkdir(parents=True, exist_ok=True)
     title = (f"{scn.name}: {job_path.name}, {res['segments']} segments of <= {cfg.seg_um} µm; contour error max "
              f"{res['contour_um']['max']:.1f} µm, RMS {res['contour_um']['rms']:.1f} µm")
     res["png"] = str(job_png(out / f"{job_path.stem}.png", title, plan, cfg, plot))
     (out / f"{job_path.stem}.json").write_text(json.dumps(res, indent=2) + "\n")
+    stages.update(1)
+    stages.close()
     return res

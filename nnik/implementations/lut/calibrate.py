@@ -30,7 +30,7 @@ def _linfit(x, y):
 
 
 def calibrate(family: str, n_inside: int = 60) -> dict:
-    from tqdm import tqdm
+    from nnik.progress import bar
 
     from nnik.errors import NnikError
     from nnik.implementations.verify import verify_on_target
@@ -38,7 +38,7 @@ def calibrate(family: str, n_inside: int = 60) -> dict:
     rows = {"avr": [], "pic18": []}
     refs = REFERENCES[family]
     with tempfile.TemporaryDirectory() as tmp:
-        for i, (scenario, cfg, role) in enumerate(tqdm(refs, desc=f"calibrating {family}")):
+        for i, (scenario, cfg, role) in enumerate(bar(refs, desc=f"calibrating {family}")):
             im = reference_impl(_cls(family), scenario, cfg)
             for target in rows:
                 r = verify_on_target(im, target, Path(tmp) / f"c{i}", Path(tmp) / f"w{i}{target}", n_inside=n_inside)

@@ -18,7 +18,7 @@ import numpy as np
 import torch
 from sklearn.linear_model import LinearRegression
 from torch import nn
-from tqdm import tqdm
+from nnik.progress import bar as progress_bar
 
 from nnik.machine.data import Dataset, Scaling
 from nnik.errors import NnikError
@@ -169,7 +169,7 @@ def train_model(scn: Scenario, ds: Dataset, normalize: bool | None = None, progr
     best: tuple[float, dict, int] | None = None
     history: list[dict] = []
     stopped_by = "budget"
-    bar = tqdm(total=cfg["restarts"], desc=f"train {scn.name}", unit="restart", disable=not progress, leave=False, mininterval=1.0)
+    bar = progress_bar(total=cfg["restarts"], desc=f"train {scn.name}", unit="restart", disable=not progress, leave=False, mininterval=1.0)
     for restart in range(cfg["restarts"]):
         torch.manual_seed(1000 * scn.dataset["seed"] + restart)
         net = MLP(2, scn.network["hidden"], yt.shape[1])

@@ -29,11 +29,11 @@ def _measure(impl, target: str, workdir: Path) -> dict:
 
 
 def calibrate(workdir: Path, out: Path = CALIBRATION) -> dict:
-    from tqdm import tqdm
+    from nnik.progress import bar
 
     rows = {"ref": [], "val": []}
     for kind, lst in (("ref", REFERENCE), ("val", VALIDATION)):
-        for i, (name, unit, cfg) in enumerate(tqdm(lst, desc=f"poly {kind}")):
+        for i, (name, unit, cfg) in enumerate(bar(lst, desc=f"poly {kind}")):
             im = reference_impl(PolyImpl, name, unit, cfg)
             row = {"scenario": name, "unit": unit, "config": cfg, "c_hash": im.source_hash()}
             for t in FEATURES:
