@@ -139,7 +139,7 @@ def write_metrics(outdir: Path, metrics: dict, merge: bool = True) -> None:
 
 
 # ---- fixed point: quantise, generate C, verify on the host -----------------------------------
-C_DIR = "c"  # the pick (NAME.c), the baselines (NAME_float.c, NAME_lut.c), alt/<family>/ and mlp/
+C_DIR = "c"  # the pick (NAME.c), the float IK (NAME_float.c), alt/<family>/ and mlp/
 MLP_DIR = "c/mlp"  # the scenario's MLP pipeline (its kernel), and the other kernel in MLP_DIR/<kernel>/
 FIXED_EVAL_FILE = "fixed_eval.npz"
 
@@ -167,7 +167,7 @@ def other_kernel(kernel: str) -> str:
 
 def export(outdir: Path):
     """Quantise model.pt, write OUTDIR/c/mlp/NAME.{h,c} (the scenario's kernel) and, for
-    comparison, OUTDIR/c/mlp/<other kernel>/NAME.{h,c}, and the baselines in OUTDIR/c/;
+    comparison, OUTDIR/c/mlp/<other kernel>/NAME.{h,c}, and the float IK (the speed reference) in OUTDIR/c/;
     returns both integer models (scenario's kernel first). Nothing is written unless every
     file was generated and the range analysis held (see nnik.files.atomic_write)."""
     from nnik.implementations.mlp import quantize as fx
@@ -183,7 +183,7 @@ def export(outdir: Path):
     staged.add(render_model_c(alt_im, scn.source), Path(MLP_DIR) / alt_im.kernel)
     in_um = np.rint(ds.p["test"] * 1000).astype(np.int64)
     truth = _truth_for_um(scn, in_um, ds.q["test"])
-    baselines = _export_baselines(scn, im, ds, staged, in_um, truth)
+    baselines = _export_baselines(scn, staged)
     total, delivered, _ = im.run(in_um)
     pre = total / float(2**im.out.F)
     stats = error_stats(pre, truth)
@@ -211,10 +211,10 @@ def mlp_flash_bytes(im) -> int:
     return im.weights_bytes() + im.tanh_bytes()
 
 
-def _export_baselines(scn, im, ds, staged, in_um: np.ndarray, truth: np.ndarray) -> dict:
-    """Stage c/NAME_float.{h,c} (where a closed form exists) and c/NAME_lut.{h,c}; their accuracy."""
+def _export_baselines(scn, staged) -> dict:
+    """Stage c/NAME_float.{h,c}, the float math.h IK, where a closed form exists. (What a firmware
+    engineer would write as a table is a point of the lut family: its best is in the selection.)"""
     from nnik.targets import float_ik
-    from nnik.implementations.lut import baseline as lut_baseline
 
     out: dict = {}
     reason = float_ik.float_unavailable_reason(scn)
@@ -223,31 +223,17 @@ def _export_baselines(scn, im, ds, staged, in_um: np.ndarray, truth: np.ndarray)
         out["float"] = {"available": True, "file": f"{scn.name}_float.c"}
     else:
         out["float"] = {"available": False, "reason": reason}
-    budget = scn.export["lut_bytes"] or mlp_flash_bytes(im)
-    lut = lut_baseline.build_lut(scn, budget, ds.p["train"], ds.q["train"])
-    staged.add(lut_baseline.render_lut_c(lut), C_DIR)
-    acc = lut_baseline.lut_accuracy(lut, in_um, truth)
-    out["lut"] = {"available": True, "file": f"{scn.name}_lut.c", "budget_bytes": int(budget),
-                  "flash_bytes": int(lut.flash_bytes), "grid": acc["grid"], "origin": lut.origin,
-                  **acc["out"], "pre_max_abs": acc["pre"]["max_abs"], "pre_rms": acc["pre"]["rms"]}
     return out
 
 
 def _verify_baselines_host(outdir: Path, bmetrics: dict, ds: Dataset, inputs: dict) -> dict:
-    """Run the baselines' C on the host: the LUT must match its integer model bit for bit; the
-    float IK's delivered error is measured against the exact IK (libm is not bit-reproducible)."""
-    from nnik.implementations.lut import baseline as lut_baseline
+    """Run the float IK's C on the host: its delivered error is measured against the exact IK
+    (libm is not bit-reproducible, so there is no integer model to match)."""
     from nnik.targets.host import run_host_driver
 
     model = TrainedModel.load(outdir / MODEL_FILE)
     scn = model.scenario
     c_dir = outdir / C_DIR
-    pts = np.concatenate(list(inputs.values()))
-    lut = lut_baseline.build_lut(scn, bmetrics["lut"]["budget_bytes"], ds.p["train"], ds.q["train"])
-    c = run_host_driver(c_dir, f"{scn.name}_lut", pts)
-    out, flags, _ = lut_baseline.lut_int(lut, pts)
-    bad = np.any(c["out"] != out, axis=1) | (c["flags"] != flags)
-    bmetrics["lut"]["host"] = {"points": int(len(pts)), "mismatches": int(bad.sum()), "bit_exact": bool(not bad.any())}
     if bmetrics["float"]["available"]:
         test_um = inputs["test"]
         c = run_host_driver(c_dir, f"{scn.name}_float", test_um, libs=("-lm",))
@@ -321,8 +307,7 @@ def estimate_row(im, target: str, measured: dict | None = None) -> dict:
 
 
 def verify_target(outdir: Path, target: str) -> dict:
-    """Run the MLP (each compiler setting), the float IK and the LUT in the same harness."""
-    from nnik.implementations.lut import baseline as lut_baseline
+    """Run the MLP (each compiler setting) and the float IK in the same harness."""
     from nnik.targets import TargetError, available, run_on_target
 
     ok, reason = available(target)
@@ -368,12 +353,7 @@ def verify_target(outdir: Path, target: str) -> dict:
         base["float"] = _target_row(r, truth, r["outputs"], inside)
     else:
         base["float"] = {"not_run": metrics["baselines"]["float"]["reason"]}
-    lut = lut_baseline.build_lut(scn, metrics["baselines"]["lut"]["budget_bytes"], ds.p["train"], ds.q["train"])
-    r = run(f"{scn.name}_lut", TARGET_OPTS[target][0])
-    lut_out, lut_flags, _ = lut_baseline.lut_int(lut, vec)
-    lut_bad = int((np.any(r["outputs"] != lut_out, axis=1) | (r["flags"] != lut_flags)).sum())
-    base["lut"] = {**_target_row(r, truth, r["outputs"], inside), "mismatches": lut_bad, "bit_exact": lut_bad == 0}
-    # each artefact's own row says whether it is bit-exact: the MLP kernels here, the LUT in base
+    # each MLP kernel's own row says whether it is bit-exact
     res = {**main, "kernel": im.kernel, "bit_exact": mismatches == 0, "mismatches": mismatches, "points": int(len(vec)),
            "clock_hz": 16_000_000, "kernels": kernels, "baselines": base}
     if "cycles" in base["float"]:

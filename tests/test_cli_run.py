@@ -17,8 +17,9 @@ def test_run_end_to_end(tmp_path, capsys):
     assert main(["run", str(toml), "-o", str(out)]) == 0
     printed = capsys.readouterr().out
     for f in ("data.npz", "model.pt", "model.onnx", "metrics.json", "c/galvo_cba2012.c", "c/galvo_cba2012.h",
-              "c/galvo_cba2012_lut.c", "c/galvo_cba2012_float.c", "report/index.html", "report/report.md"):
+              "c/galvo_cba2012_float.c", "report/index.html", "report/report.md"):
         assert (out / f).is_file(), f
+    assert not (out / "c" / "galvo_cba2012_lut.c").exists()  # the old LUT baseline retired
     m = json.loads((out / "metrics.json").read_text())
     for key in ("name", "outputs", "unit", "float", "train_seconds", "fixed", "host", "baselines", "targets"):
         assert key in m, key

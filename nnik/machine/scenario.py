@@ -79,7 +79,7 @@ TRAINING = {
 EXPORT = {
     "tanh": Param("str", default="default", doc="tanh replacement variant (see `nnik tanh`)"),
     "weight_bits": Param("int", default=16, choices=(8, 16), doc="weight storage: int16 or int8"),
-    "lut_bytes": Param("int", default=0, check=_at_least(0), doc="LUT baseline flash budget; 0 = the MLP's bytes"),
+    "lut_bytes": Param("int", default=0, check=_at_least(0), doc="ignored: the old LUT baseline retired (a table is the lut family)"),
     "kernel": Param("str", default="fast", choices=("fast", "portable"),
                     doc="fast: hardware-multiply asm on AVR/PIC18 (portable C elsewhere); portable: plain C"),
     "input_unit_um": Param("float", default=1.0, check=lambda v: None if 0.001 <= v <= 1000 else

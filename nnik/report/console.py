@@ -34,11 +34,9 @@ def print_accuracy(m: dict) -> None:
     b = m.get("baselines", {})
     if b.get("float", {}).get("max_abs"):
         rows.append(("baseline: float math.h C, delivered", b["float"]))
-    if b.get("lut"):
-        lut = b["lut"]
-        rows.append((f"baseline: LUT {lut['grid'][0]}x{lut['grid'][1]} ({lut['flash_bytes']} B), pre-rounding",
-                     {"max_abs": lut["pre_max_abs"], "rms": lut["pre_rms"]}))
-        rows.append(("baseline: LUT, delivered", lut))
+    lut = next((r for r in m.get("implementations") or [] if r.get("family") == "lut" and "pre_max_abs" in r), None)
+    if lut:  # what a firmware engineer would write: a table (the lut family's best, on its check set)
+        rows.append((f"lut family best: {lut['describe']}, pre-rounding", {"max_abs": lut["pre_max_abs"], "rms": lut["rms"]}))
     for label, s in rows:
         rel = _fmt(s["rel_pct"], 4) if "rel_pct" in s else "-"
         p99 = _fmt(s["p99"], 4) if "p99" in s else "-"

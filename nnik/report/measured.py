@@ -1,5 +1,5 @@
 """What metrics.json says about each target: its status, the implementations measured on it,
-and whether the LUT baseline wins."""
+and whether a table (the lut family's best) beats the MLP."""
 
 from __future__ import annotations
 
@@ -61,7 +61,8 @@ def mlp_error(metrics: dict) -> tuple[list[float] | None, str | None]:
 
 
 def implementations(metrics: dict, t: str, tm: dict) -> list[dict]:
-    """Every measured implementation on a target: the nnik MLP, MLP kernels, float IK, LUT.
+    """Every measured implementation on a target: the nnik MLP, MLP kernels, float IK and the lut
+    family's best (what a firmware engineer would write: a table), as verified by the selection.
 
     Each: label, kind, keypath (tuple into metrics), cycles, flash, ram, err (list or None),
     err_key (metrics key prefix of err, or None).
@@ -77,12 +78,20 @@ def implementations(metrics: dict, t: str, tm: dict) -> list[dict]:
             out.append(dict(label=f"MLP kernel {name}", kind="kernel", keypath=("targets", t, "kernels", name),
                             cycles=k.get("cycles"), flash=k.get("flash_bytes"), ram=k.get("ram_bytes"),
                             err=k.get("max_abs"), err_key=keypath("targets", t, "kernels", name, "max_abs")))
-    for bname, label, kind in (("float", "float IK with math.h", "float"), ("lut", "LUT baseline", "lut")):
-        b = lookup(tm, "baselines", bname)
-        if isinstance(b, dict):
-            out.append(dict(label=label, kind=kind, keypath=("targets", t, "baselines", bname),
-                            cycles=b.get("cycles"), flash=b.get("flash_bytes"), ram=b.get("ram_bytes"),
-                            err=b.get("max_abs"), err_key=keypath("targets", t, "baselines", bname, "max_abs")))
+    b = lookup(tm, "baselines", "float")
+    if isinstance(b, dict):
+        out.append(dict(label="float IK with math.h", kind="float", keypath=("targets", t, "baselines", "float"),
+                        cycles=b.get("cycles"), flash=b.get("flash_bytes"), ram=b.get("ram_bytes"),
+                        err=b.get("max_abs"), err_key=keypath("targets", t, "baselines", "float", "max_abs")))
+    rows = metrics.get("implementations")
+    k = next((k for k, r in enumerate(rows) if isinstance(r, dict) and r.get("family") == "lut"
+              and isinstance(lookup(r, "targets", t), dict)), None) if isinstance(rows, list) else None
+    if k is not None:
+        r, rt = rows[k], rows[k]["targets"][t]
+        out.append(dict(label=f"lut family best ({r.get('describe', 'lut')})", kind="lut",
+                        keypath=("implementations", k, "targets", t), cycles=rt.get("cycles"),
+                        flash=rt.get("flash_bytes"), ram=rt.get("ram_bytes"), err=r.get("delivered_max_abs"),
+                        err_key=keypath("implementations", k, "delivered_max_abs")))
     return out
 
 
@@ -93,7 +102,7 @@ def worst(err) -> float | None:
 
 
 def lut_verdicts(metrics: dict) -> tuple[list[str], list[str]]:
-    """(sentences where the LUT wins, sentences where it was compared and does not)."""
+    """(sentences where the lut family's best wins, sentences where it was compared and does not)."""
     unit = metrics.get("unit", "")
     wins, losses = [], []
     for t in target_names(metrics):
@@ -114,13 +123,13 @@ def lut_verdicts(metrics: dict) -> tuple[list[str], list[str]]:
         if beaten:
             for i in beaten:
                 wins.append(
-                    f"On {t} the LUT baseline wins over the {i['label']}: fewer cycles "
+                    f"On {t} the lut family's best wins over the {i['label']}: fewer cycles "
                     f"({fmt(lut['cycles'], D_CYC)} vs {fmt(i['cycles'], D_CYC)}) and lower max error "
                     f"({fmt(le, D_UNIT)} vs {fmt(worst(i['err']), D_UNIT)} {unit}), at "
                     f"{fmt(lut['flash'], D_CYC)} vs {fmt(i['flash'], D_CYC)} bytes of flash. "
                     "On this machine, consider flashing the table instead."
                 )
         else:
-            losses.append(f"On {t} the LUT baseline ({fmt(lut['cycles'], D_CYC)} cycles, max error "
+            losses.append(f"On {t} the lut family's best ({fmt(lut['cycles'], D_CYC)} cycles, max error "
                           f"{fmt(le, D_UNIT)} {unit}) is not both faster and more accurate than any MLP variant.")
     return wins, losses

@@ -114,7 +114,7 @@ def summary_rows(metrics: dict) -> list[tuple[str, ...]]:
         rows.append(_chip_row(f"mlp on {t}", t, tm, reason))
     wins, _ = lut_verdicts(metrics)
     if wins:
-        rows.append(("LUT baseline", "wins", wins[0] + (f" (and {len(wins) - 1} more)" if len(wins) > 1 else "")))
+        rows.append(("lut family best", "wins", wins[0] + (f" (and {len(wins) - 1} more)" if len(wins) > 1 else "")))
     onnx = metrics.get("onnx")
     if isinstance(onnx, dict):
         rows.append(("mlp ONNX vs torch", "ok" if onnx.get("ok") else "FAILED",

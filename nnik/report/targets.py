@@ -1,5 +1,5 @@
 """Section: latency and memory on the chips, the estimate beside each measurement, and cost vs
-accuracy against the baselines."""
+accuracy against the float IK and the lut family's best."""
 
 from __future__ import annotations
 
@@ -66,7 +66,7 @@ def build(ctx) -> Section:
     # cost vs accuracy
     hdr = ["target", "implementation", "cycles (mean)", "µs", "flash (bytes)", "RAM (bytes)"] + \
           [f"{o} max ({unit})" for o in ctx.outputs]
-    ca = Table("cost-table", "Cost vs accuracy: the MLP against the float math.h IK and a lookup table", hdr)
+    ca = Table("cost-table", "Cost vs accuracy: the MLP against the float math.h IK and the lut family's best", hdr)
     points: dict[str, list[dict]] = {}
     for tname, tm in ran:
         points[tname] = []
@@ -88,8 +88,8 @@ def build(ctx) -> Section:
         tm, reason = target_status(m, tname)
         if tm is None:
             ca.rows.append([txt(tname, "label"), not_run_cell(reason, 5 + ctx.n_out)])
-    ca.note = ("MLP error: the fixed-point model's delivered commands (bit-exact on the chip); baselines: as measured "
-               "by their own harness. Lower-left is better in the picture.")
+    ca.note = ("MLP and lut error: the fixed-point model's delivered commands (bit-exact on the chip; the lut "
+               "family's on its check set); float IK: as measured by its own harness. Lower-left is better in the picture.")
     sec.tables.append(ca)
     wins, losses = lut_verdicts(m)
     for w in wins:
@@ -97,7 +97,7 @@ def build(ctx) -> Section:
     for s in losses:
         sec.verdicts.append(("good", s))
     if ran and not wins and not losses:
-        sec.not_run.append("LUT comparison not run: no target reports a `lut` baseline with cycles and max_abs")
+        sec.not_run.append("table comparison not run: no lut family best verified on a target with cycles and errors")
     if any(points.values()):
         ctx.plot(sec, lambda: plot_cost(ctx, points))
     else:

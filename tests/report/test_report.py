@@ -1,5 +1,5 @@
 """The HTML/Markdown report: every picture exists and is a PNG, every number equals metrics.json,
-missing parts say "not run", the LUT verdict appears when it should, and Chromium renders it."""
+missing parts say "not run", the table verdict (the lut family's best against the MLP) appears when it should, and Chromium renders it."""
 
 from __future__ import annotations
 
@@ -164,13 +164,15 @@ def add_synthetic_fixed(run: Path, lut_wins: bool = True, pic18: dict | None = N
             "estimate": {"cycles": 1490, "flash_bytes": 1380, "ram_bytes": 50},
             "baselines": {
                 "float": {"cycles": 7623, "flash_bytes": 3300, "ram_bytes": 24, "max_abs": [0.5, 0.5]},
-                "lut": {"cycles": 900 if lut_wins else 2100, "flash_bytes": 8200, "ram_bytes": 12,
-                        "max_abs": lut_err},
             },
             "kernels": {"naive_c": {"cycles": 4166, "flash_bytes": 1900, "max_abs": mlp_err.tolist()}},
         },
         "pic18": pic18 if pic18 is not None else {"not_run": "toolchain missing"},
     }
+    # the lut family's best as the selection verified it (what a firmware engineer would write)
+    m["implementations"] = [{"family": "lut", "describe": "lut 40x40, int16", "delivered_max_abs": lut_err,
+                             "targets": {"avr": {"cycles": 900 if lut_wins else 2100, "flash_bytes": 8200,
+                                                 "ram_bytes": 12, "bit_exact": True}}}]
     (run / "metrics.json").write_text(json.dumps(m, indent=2))
     return m
 
@@ -183,7 +185,7 @@ PIC18_RAN = {
 }
 
 
-LATER_STAGES = ("fixed", "host", "tanh", "baselines", "targets")
+LATER_STAGES = ("fixed", "host", "tanh", "baselines", "targets", "selection", "implementations")
 
 
 @pytest.fixture
@@ -309,26 +311,26 @@ def test_full_report_with_lut_winning(galvo_copy, tmp_path):
     for key in ("fixed/max_abs/0", "fixed/rms/1", "fixed/p99/0", "fixed/delivered_max_abs/1", "fixed/weights_bytes",
                 "host/mismatches", "host/points", "tanh/max_lsb", "tanh/rms_lsb",
                 "targets/avr/cycles", "targets/avr/cycles_max", "targets/avr/flash_bytes", "targets/avr/ram_bytes",
-                "targets/avr/estimate/cycles", "targets/avr/baselines/lut/cycles", "targets/avr/baselines/float/cycles",
-                "targets/avr/baselines/lut/max_abs/0", "targets/avr/kernels/naive_c/cycles"):
+                "targets/avr/estimate/cycles", "implementations/0/targets/avr/cycles", "targets/avr/baselines/float/cycles",
+                "implementations/0/delivered_max_abs/0", "targets/avr/kernels/naive_c/cycles"):
         assert by_key(parser, key), f"{key} not shown"
     # µs at the stated clock, and the estimator's difference
     assert any(c["text"] == "95.2" for c in parser.cells)  # 1523.25 cycles / 16 MHz
     assert any(c["text"] == "-2.2" for c in parser.cells)  # (1490 - 1523.25) / 1523.25
-    assert "On avr the LUT baseline wins over the nnik MLP" in text
+    assert "On avr the lut family's best wins over the nnik MLP" in text
     assert "pic18" in text and "not run — toolchain missing" in text
     assert "fixed-point export not run" not in text
     assert "Fixed-point error over the workspace" in text
     assert "Q format: layer0.w" in text
     md = (out / "report.md").read_text()
-    assert "LUT baseline wins" in md
+    assert "lut family's best wins" in md
 
     rows = summary_rows(m)
     assert all(len(r) == len(report.SUMMARY_HEADER) for r in rows)
     d = {r[0]: r for r in rows}
     assert d["mlp on avr"][1].startswith("1523 cycles = 95.2 µs @ 16 MHz")
     assert d["mlp on pic18"][1:] == ("not run", "toolchain missing")
-    assert d["LUT baseline"][1] == "wins"
+    assert d["lut family best"][1] == "wins"
 
 
 def test_lut_not_winning_and_pic18_timing(galvo_copy):
@@ -336,9 +338,9 @@ def test_lut_not_winning_and_pic18_timing(galvo_copy):
     index = write_report(galvo_copy)
     parser, text = parse(index)
     check_numbers(parser, m)
-    assert "LUT baseline wins" not in text
+    assert "lut family's best wins" not in text
     assert "is not both faster and more accurate" in text
-    assert "not run" not in text.split('id="targets"')[1].split("</section>")[0].replace("LUT comparison not run", "")
+    assert "not run" not in text.split('id="targets"')[1].split("</section>")[0].replace("table comparison not run", "")
     # PIC18: 4 clocks per instruction cycle; 9876.5 cycles at 16 MHz = 2469.1 µs
     assert any(c["text"] == "2469.1" for c in parser.cells)
     assert by_key(parser, "targets/pic18/baselines/float/cycles")
