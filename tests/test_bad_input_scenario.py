@@ -87,3 +87,14 @@ def test_galvo_dual_near_singularity(tmp_path, capsys):
 
     text = (DATASETS / "galvo_dual_xy2.toml").read_text().replace("d_mm = 200.0", "d_mm = 0.5")
     _generate_fails(tmp_path, capsys, text, "[mechanism] d_mm", "near-singular")
+
+
+@pytest.mark.parametrize("old,new,needle", [
+    ("z_mm = 300.0", "z_mm = 1e300", "[mechanism] z_mm: must be in (0, 100000] mm"),
+    ("x_mm = [-100.0, 100.0]", "x_mm = [-1e9, 100.0]", "[workspace] x_mm: must lie within +/-100000 mm"),
+    ("microsteps = 16", "microsteps = 100000", "[actuator] microsteps: must be in [1, 1024]"),
+])
+def test_numbers_are_range_checked_before_any_work(tmp_path, capsys, old, new, needle):
+    """Issue 15: what passes validation must compile and run; a huge number is one line, not a
+    compiler error."""
+    _generate_fails(tmp_path, capsys, GALVO.replace(old, new), needle)

@@ -110,7 +110,7 @@ def test_console_script_exit_code(tmp_path):
     bad = write_toml(tmp_path, GOOD.replace("z_mm = 300.0", "z_mm = -3.0"))
     r = subprocess.run([sys.executable, "-m", "nnik", "generate", str(bad)], capture_output=True, text=True)
     assert r.returncode == 2
-    assert "[mechanism] z_mm: must be > 0" in r.stderr
+    assert "[mechanism] z_mm: must be in (0, 100000] mm, got -3" in r.stderr
     assert "Traceback" not in r.stderr
 
 

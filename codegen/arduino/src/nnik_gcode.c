@@ -47,6 +47,15 @@ static NNIK_FLASH const char M_FEED[] = "feed below 1 mm/min";
 static NNIK_FLASH const char M_RANGE[] = "coordinate out of range";
 static NNIK_FLASH const char M_R0[] = "arc radius is zero";
 static NNIK_FLASH const char M_OFF[] = "arc end is off the circle";
+static NNIK_FLASH const char M_CMDF[] = "unsupported G%d.%c";
+static NNIK_FLASH const char M_SUMBAD[] = "bad checksum";
+static NNIK_FLASH const char M_SUM[] = "checksum mismatch";
+static NNIK_FLASH const char M_PAUSE[] = "M%d pause not supported";
+static NNIK_FLASH const char M_NONMODAL[] = "two non-modal commands";
+static NNIK_FLASH const char M_AXES[] = "G%d needs X or Y";
+static NNIK_FLASH const char M_WITH[] = "G%d with a motion command";
+static NNIK_FLASH const char M_DWELL[] = "G4 needs P >= 0";
+static NNIK_FLASH const char M_P[] = "P needs G4";
 
 /* message = flash template with %c -> ch, %d -> num */
 static int8_t fail(nnik_gc_t *g, const char *tmpl, char ch, int32_t num)
@@ -114,6 +123,7 @@ void nnik_gc_init(nnik_gc_t *g, nnik_gc_emit_fn emit)
     in[0] = NNIK_GC_ORIGIN_X_UM;
     in[1] = NNIK_GC_ORIGIN_Y_UM;
     g->pos[0] = g->pos[1] = 0;
+    g->off[0] = g->off[1] = 0;
     NNIK_GC_IK(in, g->steps);
     g->feed = NNIK_GC_FEED_UM_MIN;
     g->line_no = 0;
@@ -143,8 +153,8 @@ static void seg_to(nnik_gc_t *g, int32_t x, int32_t y, int32_t feed)
     dx = x - g->pos[0];
     dy = y - g->pos[1];
     len = nnik_isqrt32((uint32_t)(dx * dx) + (uint32_t)(dy * dy));
-    in[0] = NNIK_GC_ORIGIN_X_UM + x;
-    in[1] = NNIK_GC_ORIGIN_Y_UM + y;
+    in[0] = NNIK_GC_ORIGIN_X_UM + g->off[0] + x;
+    in[1] = NNIK_GC_ORIGIN_Y_UM + g->off[1] + y;
     if (NNIK_GC_IK(in, out))
         g->clamped++;
     d[0] = out[0] - g->steps[0];
@@ -336,7 +346,7 @@ typedef struct {
     uint32_t fr;
 } num_t;
 
-enum { W_X, W_Y, W_I, W_J, W_R, W_F, W_N, W_COUNT };
+enum { W_X, W_Y, W_I, W_J, W_R, W_F, W_P, W_COUNT };
 
 /* scan [+-]digits[.digits] at *ps; 0 or an error template */
 static const char *scan_num(const char **ps, num_t *n)
@@ -385,19 +395,43 @@ static int32_t to_um(const num_t *n, uint8_t inch)
     return n->neg ? -v : v;
 }
 
+/* the dwell of G4 P (seconds, rounded to ms) in ticks, rounded down; ms < 2^24 */
+static uint32_t dwell_ticks(uint32_t ms)
+{
+    return ms / 1000 * NNIK_GC_TICK_HZ + ms % 1000 * NNIK_GC_TICK_HZ / 1000;
+}
+
+/* '*nn' at s: the checksum; 0 or an error template */
+static const char *checksum(const char *s, uint8_t x)
+{
+    uint16_t v = 0;
+    uint8_t digits = 0;
+    while (*s >= '0' && *s <= '9') {
+        v = (uint16_t)(v * 10 + (*s++ - '0'));
+        if (++digits > 3)
+            return M_SUMBAD;
+    }
+    while (*s == ' ' || *s == '\t' || *s == '\r')
+        s++;
+    if (!digits || *s || v > 255)
+        return M_SUMBAD;
+    return v == x ? 0 : M_SUM;
+}
+
 int8_t nnik_gc_line(nnik_gc_t *g, const char *line)
 {
     char buf[NNIK_GC_LINE_MAX + 1];
     const char *s;
     const char *err;
-    uint8_t i = 0, in_comment = 0, wait = 0, motion = 0xff, inch = g->inch, rel = g->relative;
+    uint8_t i = 0, in_comment = 0, wait = 0, motion = 0xff, inch = g->inch, rel = g->relative, x = 0;
+    uint8_t nonmodal = 0; /* 4, 28, 92 */
     num_t w[W_COUNT];
     int32_t tgt[2], feed;
     char c;
 
     g->line_no++;
-    /* strip blanks and comments, upper-case */
-    for (s = line; (c = *s) != 0; s++) {
+    /* strip blanks and comments, upper-case; '*' ends the line: a checksum of the bytes before */
+    for (s = line; (c = *s) != 0; x ^= (uint8_t)c, s++) {
         if (in_comment) {
             if (c == ')')
                 in_comment = 0;
@@ -405,6 +439,12 @@ int8_t nnik_gc_line(nnik_gc_t *g, const char *line)
         }
         if (c == ';')
             break;
+        if (c == '*') {
+            err = checksum(s + 1, x);
+            if (err)
+                return fail(g, err, 0, 0);
+            break;
+        }
         if (c == '(') {
             in_comment = 1;
             continue;
@@ -434,7 +474,14 @@ int8_t nnik_gc_line(nnik_gc_t *g, const char *line)
         case 'J': idx = W_J; break;
         case 'R': idx = W_R; break;
         case 'F': idx = W_F; break;
-        case 'N': idx = W_N; break;
+        case 'P': idx = W_P; break;
+        case 'N': /* a line number: up to 8 digits, read and ignored */
+            for (i = 0; *s >= '0' && *s <= '9'; s++)
+                if (++i > 8)
+                    return fail(g, M_BIG, letter, 0);
+            if (!i)
+                return fail(g, M_BADNUM, letter, 0);
+            continue;
         case 'G': case 'M': break;
         default: return fail(g, M_WORD, letter, 0);
         }
@@ -442,33 +489,54 @@ int8_t nnik_gc_line(nnik_gc_t *g, const char *line)
         if (err)
             return fail(g, err, letter, 0);
         if (idx >= 0) {
-            if (w[idx].have && idx != W_N)
+            if (w[idx].have)
                 return fail(g, M_REPEAT, letter, 0);
             w[idx] = n;
             continue;
         }
+        if (letter == 'G' && n.dot && !n.neg && n.nd == 1)
+            return fail(g, M_CMDF, (char)('0' + n.fr), n.ip);
         if (n.neg || n.dot)
             return fail(g, M_INT, letter, 0);
         if (letter == 'G') {
-            if (n.ip <= 3) {
+            switch (n.ip) {
+            case 0: case 1: case 2: case 3:
                 if (motion != 0xff)
                     return fail(g, M_TWO, 0, 0);
                 motion = (uint8_t)n.ip;
-            } else if (n.ip == 20 || n.ip == 21) {
+                break;
+            case 4: case 28: case 92:
+                if (nonmodal)
+                    return fail(g, M_NONMODAL, 0, 0);
+                nonmodal = (uint8_t)n.ip;
+                break;
+            case 20: case 21:
                 inch = n.ip == 20;
-            } else if (n.ip == 90 || n.ip == 91) {
+                break;
+            case 90: case 91:
                 rel = n.ip == 91;
-            } else {
+                break;
+            case 17: case 40: case 49: case 54: case 64: case 80: case 94:
+                break; /* the only plane, compensation, coordinate system, path and feed mode */
+            default:
                 return fail(g, M_CMD, letter, n.ip);
             }
-        } else if (n.ip == 2 || n.ip == 30 || n.ip == 400) {
-            wait = 1;
+        } else if (n.ip == 2 || n.ip == 30) {
+            wait = 3;
+        } else if (n.ip == 400) {
+            wait |= 1;
+        } else if (n.ip <= 1) {
+            return fail(g, M_PAUSE, 0, n.ip);
         } else {
             return fail(g, M_CMD, letter, n.ip);
         }
     }
 
     /* check everything before anything changes */
+    if (nonmodal && motion != 0xff)
+        return fail(g, M_WITH, 0, nonmodal);
+    if (w[W_P].have && nonmodal != 4)
+        return fail(g, M_P, 0, 0);
     if (motion == 0xff)
         motion = g->motion;
     feed = g->feed;
@@ -477,20 +545,56 @@ int8_t nnik_gc_line(nnik_gc_t *g, const char *line)
         if (feed < MIN_FEED)
             return fail(g, M_FEED, 0, 0);
     }
-    if ((w[W_I].have || w[W_J].have) && motion < 2)
+    if ((w[W_I].have || w[W_J].have) && (motion < 2 || nonmodal))
         return fail(g, M_IJ, 0, 0);
-    if (w[W_R].have && motion < 2)
+    if (w[W_R].have && (motion < 2 || nonmodal))
         return fail(g, M_RG, 0, 0);
     for (i = 0; i < 2; i++) {
         tgt[i] = g->pos[i];
         if (w[i].have) {
             int32_t v = to_um(&w[i], inch);
-            tgt[i] = rel ? g->pos[i] + v : v;
+            tgt[i] = rel && nonmodal != 92 ? g->pos[i] + v : v;
         }
         if (tgt[i] > POS_LIMIT || tgt[i] < -POS_LIMIT)
             return fail(g, M_RANGE, 0, 0);
     }
-    {
+    if (nonmodal) {
+        uint8_t xy = w[W_X].have || w[W_Y].have;
+        int32_t v = w[W_P].have ? to_um(&w[W_P], 0) : -1;
+        if (nonmodal == 4 && (v < 0 || xy))
+            return fail(g, M_DWELL, 0, 0);
+        if (nonmodal == 92) {
+            int32_t o[2];
+            if (!xy)
+                return fail(g, M_AXES, 0, 92);
+            for (i = 0; i < 2; i++) {
+                o[i] = g->off[i] + g->pos[i] - tgt[i];
+                if (o[i] > POS_LIMIT || o[i] < -POS_LIMIT)
+                    return fail(g, M_RANGE, 0, 0);
+            }
+            g->off[0] = o[0];
+            g->off[1] = o[1];
+            g->pos[0] = tgt[0];
+            g->pos[1] = tgt[1];
+        }
+        g->inch = inch;
+        g->relative = rel;
+        g->feed = feed;
+        if (nonmodal == 4) {
+            uint32_t t = dwell_ticks((uint32_t)v);
+            if (t) {
+                int32_t d[2] = {0, 0};
+                g->segments++;
+                g->emit(g, d, t);
+            }
+        } else if (nonmodal == 28) { /* via X Y (if given), then home: where the motors started */
+            line_to(g, tgt[0], tgt[1], NNIK_GC_RAPID_UM_MIN);
+            for (i = 0; i < 2; i++)
+                if (w[i].have || !xy)
+                    tgt[i] = -g->off[i];
+            line_to(g, tgt[0], tgt[1], NNIK_GC_RAPID_UM_MIN);
+        }
+    } else {
         uint8_t axes = w[W_X].have || w[W_Y].have || w[W_I].have || w[W_J].have || w[W_R].have;
         int32_t c2[2];
         uint32_t r = 0;
@@ -541,5 +645,9 @@ int8_t nnik_gc_line(nnik_gc_t *g, const char *line)
                 line_to(g, tgt[0], tgt[1], f);
         }
     }
-    return wait;
+    if (wait & 2) { /* M2/M30 end the program as grbl: G1, G90 */
+        g->motion = 1;
+        g->relative = 0;
+    }
+    return (int8_t)(wait & 1);
 }

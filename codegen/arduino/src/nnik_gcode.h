@@ -7,8 +7,12 @@
  * Words: G0 G1 G2 G3 (modal motion), G20/G21 (inch/mm), G90/G91 (absolute/incremental),
  * X Y (end point), I J (arc centre offset from the start, always incremental) or R (arc radius;
  * negative: the arc longer than half a turn; an end at the start, or a chord longer than 2|R|
- * beyond the end tolerance, is an error), F (feed per minute), N (ignored), M2/M30/M400 (wait
- * until the motion is done).  Comments: (...) and ';'.
+ * beyond the end tolerance, is an error), F (feed per minute), N (line number, ignored),
+ * M400 (wait until the motion is done), M2/M30 (end: wait, then G1 G90 as grbl), G4 P (dwell,
+ * seconds: a segment without steps), G92 X Y (set the program position: the motors stay),
+ * G28 [X Y] (rapid via X Y, then to where the motors started, the named axes only), and
+ * G17 G40 G49 G54 G64 G80 G94 (the only modes there are: accepted, nothing to do).
+ * Comments: (...) and ';'.  '*nn' ends a line: the XOR of every byte before the '*' (Marlin).
  *
  * Motion: a line is cut into ceil(L / NNIK_GC_SEG_UM) equal segments; an arc into quarter
  * turns and those by bisection until every chord is <= NNIK_GC_SEG_UM.  At each segment end the
@@ -35,6 +39,7 @@ typedef void (*nnik_gc_emit_fn)(nnik_gc_t *g, const int32_t steps[2], uint32_t t
 
 struct nnik_gc {
     int32_t pos[2];      /* program position, um */
+    int32_t off[2];      /* G92: machine position (less the work origin) = pos + off */
     int32_t steps[2];    /* actuator command at pos */
     int32_t feed;        /* um per minute */
     uint32_t line_no;    /* lines seen (1 = the first) */

@@ -67,11 +67,12 @@ def path_dist_um(p_mm: np.ndarray, move_idx: np.ndarray, moves: list[Move], orig
 
 
 def segment_moves(plan: Plan) -> np.ndarray:
-    """Move index of every segment."""
-    idx = np.zeros(len(plan.ends), np.int64)
+    """Move index of every segment; a dwell (G4) belongs to the move before it (the first move
+    if it comes before any)."""
+    idx = np.full(len(plan.ends), -1, np.int64)
     for m, mv in enumerate(plan.moves):
         idx[mv.first_seg:mv.first_seg + mv.n_seg] = m
-    return idx
+    return np.maximum(np.maximum.accumulate(idx) if len(idx) else idx, 0)
 
 
 def units_to_mm(scn, units: np.ndarray) -> np.ndarray:

@@ -42,6 +42,7 @@ class Plan:
     ends: list[tuple[int, int]] = field(default_factory=list)  # program um
     chord: list[int] = field(default_factory=list)  # floor length of each segment, um
     feed: list[int] = field(default_factory=list)  # um/min used for its ticks
+    dwell: list[int] = field(default_factory=list)  # G4: its ticks (no steps); 0: a move
     moves: list[Move] = field(default_factory=list)
     replies: list[str] = field(default_factory=list)  # "ok" or "error: line N: ..."
 
@@ -86,6 +87,7 @@ class Interpreter:
     def __init__(self, cfg: MachineConfig):
         self.cfg = cfg
         self.pos = (0, 0)
+        self.off = (0, 0)  # G92: machine position (less the work origin) = pos + off
         self.feed = cfg.feed_um_min
         self.motion = 0
         self.inch = False
@@ -96,10 +98,34 @@ class Interpreter:
     # ---- segments ------------------------------------------------------------------------
     def _seg_to(self, x: int, y: int, feed: int) -> None:
         dx, dy = x - self.pos[0], y - self.pos[1]
-        self.plan.ends.append((x, y))
+        self.plan.ends.append((x + self.off[0], y + self.off[1]))
         self.plan.chord.append(isqrt(dx * dx + dy * dy))
         self.plan.feed.append(feed)
+        self.plan.dwell.append(0)
         self.pos = (x, y)
+
+    def _dwell(self, ms: int) -> None:
+        t = ms // 1000 * self.cfg.tick_hz + ms % 1000 * self.cfg.tick_hz // 1000
+        if t:
+            self.plan.ends.append((self.pos[0] + self.off[0], self.pos[1] + self.off[1]))
+            self.plan.chord.append(0)
+            self.plan.feed.append(self.feed)
+            self.plan.dwell.append(t)
+
+    def _move(self, motion: int, tgt, c=None, r: int = 0, feed: int = 0) -> None:
+        """A line (motion 0/1) or an arc to tgt, recorded as a Move in the machine frame less
+        the work origin (program position + the G92 offset)."""
+        start, first = self.pos, len(self.plan.ends)
+        if motion >= 2:
+            self._arc_to(c, tuple(tgt), r, motion == 3, feed)
+        else:
+            self._line_to(tgt[0], tgt[1], feed)
+        n = len(self.plan.ends) - first
+        if n:
+            o = self.off
+            sh = lambda p: (p[0] + o[0], p[1] + o[1])  # noqa: E731
+            self.plan.moves.append(Move(self.line_no, "arc" if motion >= 2 else "line", sh(start), sh(tgt), first, n,
+                                        None if c is None else sh(c), r, motion == 3, motion == 0))
 
     def _line_to(self, x: int, y: int, feed: int) -> None:
         x0, y0 = self.pos
@@ -156,26 +182,62 @@ class Interpreter:
 
     def _line(self, text: str) -> None:
         w = parse_line(text)
+        nm = w.nonmodal
+        if nm and w.motion is not None:
+            raise GcodeLineError(f"G{nm} with a motion command")
+        v = w.values
+        if "P" in v and nm != 4:
+            raise GcodeLineError("P needs G4")
         inch = self.inch if w.inch is None else w.inch
         rel = self.relative if w.relative is None else w.relative
         motion = self.motion if w.motion is None else w.motion
-        v = w.values
         feed = self.feed
         if "F" in v:
             feed = v["F"].to_um(inch)
             if feed < MIN_FEED:
                 raise GcodeLineError("feed below 1 mm/min")
-        if ("I" in v or "J" in v) and motion < 2:
+        if ("I" in v or "J" in v) and (motion < 2 or nm):
             raise GcodeLineError("I/J need G2 or G3")
-        if "R" in v and motion < 2:
+        if "R" in v and (motion < 2 or nm):
             raise GcodeLineError("R needs G2 or G3")
         tgt = list(self.pos)
         for k, axis in enumerate("XY"):
             if axis in v:
                 val = v[axis].to_um(inch)
-                tgt[k] = self.pos[k] + val if rel else val
+                tgt[k] = self.pos[k] + val if rel and nm != 92 else val
             if abs(tgt[k]) > POS_LIMIT:
                 raise GcodeLineError("coordinate out of range")
+        if nm:
+            self._nonmodal(w, nm, tgt, inch, rel, feed)
+        else:
+            self._motion(w, tgt, inch, rel, motion, feed)
+        if w.end:  # M2/M30 end the program as grbl: G1, G90
+            self.motion, self.relative = 1, False
+
+    def _nonmodal(self, w, nm: int, tgt: list[int], inch: bool, rel: bool, feed: int) -> None:
+        v = w.values
+        xy = "X" in v or "Y" in v
+        ms = v["P"].to_um(False) if "P" in v else -1
+        if nm == 4 and (ms < 0 or xy):
+            raise GcodeLineError("G4 needs P >= 0")
+        if nm == 92:
+            if not xy:
+                raise GcodeLineError("G92 needs X or Y")
+            off = tuple(self.off[k] + self.pos[k] - tgt[k] for k in range(2))
+            if any(abs(o) > POS_LIMIT for o in off):
+                raise GcodeLineError("coordinate out of range")
+            self.off, self.pos = off, tuple(tgt)
+        self.inch, self.relative, self.feed = inch, rel, feed
+        if nm == 4:
+            self._dwell(ms)
+        elif nm == 28:  # via X Y (if given), then home: where the motors started
+            rapid = self.cfg.rapid_um_min
+            self._move(0, tgt, feed=rapid)
+            home = [-self.off[k] if ("XY"[k] in v or not xy) else tgt[k] for k in range(2)]
+            self._move(0, home, feed=rapid)
+
+    def _motion(self, w, tgt: list[int], inch: bool, rel: bool, motion: int, feed: int) -> None:
+        v = w.values
         axes = any(a in v for a in "XYIJR")
         c, r = None, 0
         if axes and motion >= 2:
@@ -202,18 +264,8 @@ class Interpreter:
             if re == 0 or abs(re - r) > 5 + r // 1000:
                 raise GcodeLineError("arc end is off the circle")
         self.inch, self.relative, self.motion, self.feed = inch, rel, motion, feed
-        if not axes:
-            return
-        f = self.cfg.rapid_um_min if motion == 0 else feed
-        start, first = self.pos, len(self.plan.ends)
-        if motion >= 2:
-            self._arc_to(c, tuple(tgt), r, motion == 3, f)
-        else:
-            self._line_to(tgt[0], tgt[1], f)
-        n = len(self.plan.ends) - first
-        if n:
-            self.plan.moves.append(Move(self.line_no, "arc" if motion >= 2 else "line", start, tuple(tgt), first, n,
-                                        c, r, motion == 3, motion == 0))
+        if axes:
+            self._move(motion, tgt, c, r, self.cfg.rapid_um_min if motion == 0 else feed)
 
 
 @dataclass
@@ -238,6 +290,8 @@ def plan_steps(plan: Plan, cfg: MachineConfig, ik) -> Segments:
     feed = np.asarray(plan.feed, dtype=np.int64)
     ticks = (chord * 60 * cfg.tick_hz + feed - 1) // feed
     ticks = np.maximum.reduce([ticks, np.abs(delta[:, 0]), np.abs(delta[:, 1]), np.ones_like(ticks)])
+    dwell = np.asarray(plan.dwell, dtype=np.int64)
+    ticks = np.where(dwell > 0, dwell, ticks)
     return Segments(ends, out, delta, ticks, np.asarray(flags, dtype=np.int64)[1:])
 
 

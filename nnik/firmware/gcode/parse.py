@@ -13,7 +13,9 @@ from dataclasses import dataclass, field
 LINE_MAX = 95  # characters per line, comments included (NNIK_GC_LINE_MAX)
 INT_DIGITS_MAX = 9999
 DECIMALS_MAX = 5
-AXIS_LETTERS = "XYIJRF"
+AXIS_LETTERS = "XYIJRFP"
+N_DIGITS_MAX = 8
+ACCEPTED_MODES = (17, 40, 49, 54, 64, 80, 94)  # the only plane, compensation, system, path, feed mode
 
 
 class GcodeLineError(ValueError):
@@ -42,23 +44,44 @@ class Num:
 class Words:
     """What one line says: axis words, the motion command and modal changes it carries."""
 
-    values: dict[str, Num] = field(default_factory=dict)  # X Y I J R F
+    values: dict[str, Num] = field(default_factory=dict)  # X Y I J R F P
     motion: int | None = None
     inch: bool | None = None
     relative: bool | None = None
     wait: bool = False
+    end: bool = False  # M2/M30
+    nonmodal: int = 0  # 4, 28, 92
+
+
+def checksum(rest: str, x: int) -> None:
+    """The digits after '*' against x, the XOR of the bytes before it (Marlin)."""
+    i = 0
+    while i < len(rest) and "0" <= rest[i] <= "9":
+        i += 1
+        if i > 3:
+            raise GcodeLineError("bad checksum")
+    if not i or rest[i:].strip(" \t\r") or int(rest[:i]) > 255:
+        raise GcodeLineError("bad checksum")
+    if int(rest[:i]) != x:
+        raise GcodeLineError("checksum mismatch")
 
 
 def clean(line: str) -> str:
-    """Drop blanks, '(...)' and ';...' comments; upper-case."""
+    """Drop blanks, '(...)' and ';...' comments; upper-case; '*nn' (outside comments) ends the
+    line and must be the XOR of the bytes before it."""
     if len(line) > LINE_MAX:
         raise GcodeLineError("line too long")
-    out, in_comment = [], False
-    for c in line:
+    out, in_comment, x = [], False, 0
+    for k, c in enumerate(line):
+        if k:
+            x ^= ord(line[k - 1])
         if in_comment:
             in_comment = c != ")"
             continue
         if c == ";":
+            break
+        if c == "*":
+            checksum(line[k + 1:], x)
             break
         if c == "(":
             in_comment = True
@@ -110,14 +133,23 @@ def parse_line(line: str) -> Words:
             raise GcodeLineError("unexpected character")
         if letter not in AXIS_LETTERS + "NGM":
             raise GcodeLineError(f"unsupported word {letter}")
+        if letter == "N":  # a line number: up to 8 digits, read and ignored
+            k = i
+            while i < len(s) and "0" <= s[i] <= "9":
+                i += 1
+                if i - k > N_DIGITS_MAX:
+                    raise GcodeLineError("number too large after N")
+            if i == k:
+                raise GcodeLineError("bad number after N")
+            continue
         n, i = scan_num(s, i, letter)
         if letter in AXIS_LETTERS:
             if letter in w.values:
                 raise GcodeLineError(f"repeated word {letter}")
             w.values[letter] = n
             continue
-        if letter == "N":
-            continue
+        if letter == "G" and n.dot and not n.neg and n.nd == 1:
+            raise GcodeLineError(f"unsupported G{n.ip}.{n.fr}")
         if n.neg or n.dot:
             raise GcodeLineError(f"{letter} needs a whole number")
         if letter == "G":
@@ -127,12 +159,19 @@ def parse_line(line: str) -> Words:
                 w.motion = n.ip
             elif n.ip in (20, 21):
                 w.inch = n.ip == 20
+            elif n.ip in (4, 28, 92):
+                if w.nonmodal:
+                    raise GcodeLineError("two non-modal commands")
+                w.nonmodal = n.ip
             elif n.ip in (90, 91):
                 w.relative = n.ip == 91
-            else:
+            elif n.ip not in ACCEPTED_MODES:
                 raise GcodeLineError(f"unsupported G{n.ip}")
         elif n.ip in (2, 30, 400):
             w.wait = True
+            w.end = w.end or n.ip != 400
+        elif n.ip <= 1:
+            raise GcodeLineError(f"M{n.ip} pause not supported")
         else:
             raise GcodeLineError(f"unsupported M{n.ip}")
     return w

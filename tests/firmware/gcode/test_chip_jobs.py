@@ -39,3 +39,19 @@ def test_bad_r_arcs_get_the_same_error_on_the_chip(firmware):
                                  "error: line 4: R needs G2 or G3", "error: line 5: arc radius is zero",
                                  "error: line 6: R arc ends at its start"]
     assert plan.replies[6:] == ["ok", "ok"]
+
+
+# the grbl-style job without the tool: N numbers, a checksum, the modal header, G92, G28,
+# a dwell, lower case, I/J arcs and M30
+GRBL = ["N1 G17 G21 G90 G40 G49 G80 G94*24", "N2 G92 X0 Y0", "N3 g0 x5 y5", "N4 G1 X8 F3000", "N5 G4 P0.05",
+        "N6 G2 X5 Y8 I-3 J0", "N7 G92 X0 Y0", "N8 G91 G1 X-2 Y-2", "N9 G28", "N10 G4 P0.0123", "N11 G18",
+        "N12 M30"]
+
+
+@pytest.mark.parametrize("scenario", MACHINES)
+def test_grbl_words_on_the_chip(firmware, scenario):
+    plan, seg, res = run_both(firmware[scenario], GRBL)
+    assert plan.replies == ["ok"] * 10 + ["error: line 11: unsupported G18", "ok"]
+    dwell = [t for t in plan.dwell if t]
+    assert dwell == [500, 120]  # ticks at 10 kHz (P in whole ms), each a segment on the chip too
+    assert plan.ends[-1] == (0, 0)  # G28: back where the motors started, after two G92s

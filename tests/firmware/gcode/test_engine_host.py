@@ -91,3 +91,48 @@ def test_r_arcs_at_the_limits_and_random(corexy_lib):
     plan = compare(outdir, lib, info, lines)
     ok = sum(r == "ok" for r in plan.replies)
     assert 100 < ok < len(lines) - 50  # R arcs drawn and R arcs refused
+
+
+def with_checksum(line: str) -> str:
+    x = 0
+    for c in line.encode("latin-1"):
+        x ^= c
+    return f"{line}*{x}"
+
+
+def test_grbl_words_equal_on_the_host(corexy_lib):
+    """N numbers and checksums (good and bad), the accepted and refused modal words, G92 (also in
+    G91 and inches), G28 with and without axes, G4 dwells, M2/M30 and M0, then 200 random lines
+    mixing them with moves and arcs."""
+    outdir, lib, info = corexy_lib
+    lines = [with_checksum("N1 G17 G21 G90 G40 G49 G80 G94 G54 G64"), "N2 G1 X1 Y1 F900*0", "N3 G18", "G93 G1 X1",
+             "N4 G0 X5 Y-3", with_checksum("N5 G92 X0 Y0"), "G1 X2 Y2", "G91 G92 X1", "G1 X1 Y-1", "G20 G92 Y0.1",
+             "G21 G90 G2 X4 Y0 I1 J-1", "G4 P0.25", "G4 P0", "G4 P-1", "G28 X1", "G28", "G91 G28 Y2", "G28.1",
+             "G92", "G92 X1 G1", "M0", "M1", "M30", "X1 Y1", "G4 P1.0004", "M2", "N99999999 G0 X0 Y0 *12 x"]
+    rng = np.random.default_rng(3)
+    for _ in range(200):
+        x, y = rng.uniform(-15, 15, 2)
+        k = rng.integers(0, 8)
+        if k == 0:
+            lines.append(f"G92 X{x:.3f}" + (f" Y{y:.3f}" if rng.integers(0, 2) else ""))
+        elif k == 1:
+            lines.append(f"G4 P{rng.uniform(0, 0.3):.4f}")
+        elif k == 2:
+            lines.append(rng.choice(["G28", f"G28 X{x:.2f}", f"G91 G28 Y{y:.2f}", "G90", "M30", "M2"]))
+        elif k == 3:
+            lines.append(with_checksum(f"N{rng.integers(0, 10**8)} G1 X{x:.3f} Y{y:.3f}"))
+        elif k == 4:
+            lines.append(f"G{rng.integers(2, 4)} X{x:.3f} Y{y:.3f} R{rng.uniform(-20, 20):.3f} F{rng.uniform(300, 3000):.0f}")
+        elif k == 5:
+            lines.append(rng.choice(["G18", "G41", "G55", "G61", "M0", "G4", "N1 G1 X1*1", "G1 X1 P1", "G92 G0 X1"]))
+        else:
+            lines.append(f"G{rng.integers(0, 2)} X{x:.3f} Y{y:.3f}")
+    plan = compare(outdir, lib, info, lines)
+    assert plan.replies[:4] == ["ok", "error: line 2: checksum mismatch", "error: line 3: unsupported G18",
+                                "error: line 4: unsupported G93"]
+    assert plan.replies[13] == "error: line 14: G4 needs P >= 0"
+    assert plan.replies[17:22] == ["error: line 18: unsupported G28.1", "error: line 19: G92 needs X or Y",
+                                   "error: line 20: G92 with a motion command", "error: line 21: M0 pause not supported",
+                                   "error: line 22: M1 pause not supported"]
+    assert plan.replies[26] == "error: line 27: bad checksum"
+    assert sum(d > 0 for d in plan.dwell) > 15 and sum(r != "ok" for r in plan.replies) > 30

@@ -30,9 +30,23 @@ def test_words_modes_and_comments():
 
 @pytest.mark.parametrize("line, msg", [
     ("G1 Z5", "unsupported word Z"),
-    ("G4 P1", "unsupported G4"),
-    ("M3", "unsupported M3"),
-    ("G1.5 X1", "G needs a whole number"),
+    ("G18 G1 X1", "unsupported G18"),
+    ("G93", "unsupported G93"),
+    ("G55", "unsupported G55"),
+    ("G28.1", "unsupported G28.1"),
+    ("G4 G92 X1", "two non-modal commands"),
+    ("M0", "M0 pause not supported"),
+    ("m1", "M1 pause not supported"),
+    ("M7", "unsupported M7"),
+    ("N", "bad number after N"),
+    ("N123456789 G1 X1", "number too large after N"),
+    ("N10 G1 X1 *", "bad checksum"),
+    ("N10 G1 X1 *1000", "bad checksum"),
+    ("N10 G1 X1 *256", "bad checksum"),
+    ("N10 G1 X1 *12 G1", "bad checksum"),
+    ("N10 G1 X1*0", "checksum mismatch"),
+    ("G1.5 X1", "unsupported G1.5"),
+    ("G1.25 X1", "G needs a whole number"),
     ("G1 X", "bad number after X"),
     ("G1 X-.", "bad number after X"),
     ("G1 X10000", "number too large after X"),
@@ -47,6 +61,28 @@ def test_errors_name_the_problem(line, msg):
     with pytest.raises(GcodeLineError) as e:
         parse_line(line)
     assert str(e.value) == msg
+
+
+def marlin(line: str) -> str:
+    """line + '*' + the XOR of its bytes, as a Marlin host sends it."""
+    x = 0
+    for c in line.encode("latin-1"):
+        x ^= c
+    return f"{line}*{x}"
+
+
+def test_line_numbers_checksums_and_grbl_modes():
+    w = parse_line(marlin("N12345678 G17 G40 G49 G80 G94 G54 G64 G1 x1") + " \r")
+    assert w.motion == 1 and w.values["X"].to_um(False) == 1000
+    assert marlin("N1 G1") == "N1 G1*41"  # 0x4E ^ 0x31 ^ 0x20 ^ 0x47 ^ 0x31, by hand
+    # a '*' inside a comment is no checksum; the checksum covers the comment before it
+    assert parse_line("G1 X1 (a*b) ; c*d").values["X"].ip == 1
+    assert parse_line(marlin("N2 G1 (here) X1")).values["X"].ip == 1
+    with pytest.raises(GcodeLineError, match="checksum mismatch"):
+        parse_line(marlin("N2 G1 X1").replace("X1", "X2"))
+    w = parse_line("G4 P0.5")
+    assert w.nonmodal == 4 and w.values["P"].to_um(False) == 500
+    assert parse_line("M30").end and not parse_line("M400").end
 
 
 def test_split_lines_keeps_bytes_and_drops_the_last_newline():

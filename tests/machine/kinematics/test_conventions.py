@@ -89,7 +89,13 @@ def test_a_equals_b_is_refused():
 
 
 def test_newton_failure_is_reported():
-    # a bow of 1 km folds the map: Newton cannot converge and must say so
-    m = KINDS["corexy"]({"R1_mm": 5.0, "R2_mm": 5.0, "distortion": {"bow_mm": 1e6, "racking_deg": 80.0}}, WS)
-    with pytest.raises(NnikError):
+    # a bow of 1 m on a 200 mm rail with 45 deg of racking folds the map: Newton cannot converge
+    # and must say so (the largest values the range checks allow)
+    m = KINDS["corexy"]({"R1_mm": 5.0, "R2_mm": 5.0, "distortion": {"bow_mm": 1000.0, "racking_deg": 45.0}}, WS)
+    with pytest.raises(NnikError, match="Newton inverse did not converge"):
         m.inverse(np.random.default_rng(0).uniform(-100, 100, (200, 2)))
+
+
+def test_distortions_beyond_any_frame_are_refused():
+    with pytest.raises(NnikError, match=r"bow_mm: must be in \[-1000, 1000\] mm"):
+        KINDS["corexy"]({"R1_mm": 5.0, "R2_mm": 5.0, "distortion": {"bow_mm": 1e6}}, WS)
