@@ -14,6 +14,7 @@ def um(text: str, inch: bool = False) -> int:
 @pytest.mark.parametrize("text, inch, want", [
     ("10", False, 10000), ("-2.351", False, -2351), ("0.0005", False, 1), ("-0.0005", False, -1),
     ("0.00049", False, 0), (".5", False, 500), ("+3.", False, 3000), ("9999.99999", False, 10000000),
+    ("1.000000", False, 1000), ("0.000020", True, 1), ("0.000019", True, 0), ("9999.999999", True, 254000000),
     ("1", True, 25400), ("0.0025", True, 64), ("-0.0025", True, -64), ("0.00001", True, 0),
 ])
 def test_numbers_round_half_away_from_zero(text, inch, want):
@@ -50,7 +51,7 @@ def test_words_modes_and_comments():
     ("G1 X", "bad number after X"),
     ("G1 X-.", "bad number after X"),
     ("G1 X10000", "number too large after X"),
-    ("G1 X1.123456", "too many decimals after X"),
+    ("G1 X1.1234567", "too many decimals after X"),
     ("G1 X1 X2", "repeated word X"),
     ("G0 G1 X1", "two motion commands"),
     ("G1 X1 (open", "unterminated comment"),
@@ -80,6 +81,7 @@ def test_line_numbers_checksums_and_grbl_modes():
     assert parse_line(marlin("N2 G1 (here) X1")).values["X"].ip == 1
     with pytest.raises(GcodeLineError, match="checksum mismatch"):
         parse_line(marlin("N2 G1 X1").replace("X1", "X2"))
+    assert parse_line(" % (start)").values == {}  # a CAM post's first and last line
     w = parse_line("G4 P0.5")
     assert w.nonmodal == 4 and w.values["P"].to_um(False) == 500
     assert parse_line("M30").end and not parse_line("M400").end
