@@ -62,8 +62,8 @@ def job_png(path: Path, title: str, plan: Plan, cfg: MachineConfig, plot: dict, 
         for on, pts in _tool_runs(seg, cfg):
             label = None if on in seen else ("tool on" if on else "travel")
             seen.add(on)
-            ax.plot(pts[:, 0], pts[:, 1], color="0.2" if on else "0.6", lw=1.0 if on else 0.8,
-                    ls="-" if on else "--", zorder=1, label=label)
+            ax.plot(pts[:, 0], pts[:, 1], color="black" if on else "tab:red", lw=0.9 if on else 0.8,
+                    ls="-" if on else "--", zorder=3, label=label)  # over the reached positions
         if seen:
             ax.legend(loc="upper right", fontsize=7)
     if len(reached_mm):
