@@ -66,6 +66,9 @@ class MachineConfig:
 
 
 def default_machine(scn) -> MachineConfig:
-    """Program (0, 0) at the centre of the workspace, 0.5 mm segments, 10 kHz ticks."""
+    """Program (0, 0) at the centre of the workspace, 0.5 mm segments, 10 kHz ticks, and the
+    scenario's [tool] (a laser by default)."""
     lo, hi = domain_um(scn.workspace)
-    return MachineConfig(origin_um=tuple(int(v) for v in (lo + hi) // 2))
+    tool = dict(getattr(scn, "tool", None) or {})
+    kind = tool.pop("kind", "laser")
+    return MachineConfig(origin_um=tuple(int(v) for v in (lo + hi) // 2), tool=kind, **tool)

@@ -89,3 +89,39 @@ def test_line_numbers_checksums_and_grbl_modes():
 
 def test_split_lines_keeps_bytes_and_drops_the_last_newline():
     assert split_lines(b"G1 X1\r\n\nG1 Y\xe9\n") == ["G1 X1\r", "", "G1 Y\xe9"]
+
+
+def test_the_scenarios_tool_table_reaches_the_machine_and_the_library_header(tmp_path):
+    """[tool] in the scenario (issue 20): the firmware's machine and the exported config header
+    carry it; a job's '; nnik-machine:' comment still overrides it."""
+    from jinja2 import Environment, FileSystemLoader
+
+    from nnik.firmware_config import default_machine
+    from nnik.gcode.job import job_machine
+    from nnik.scenario import load_scenario
+    from tests.conftest import DATASETS, ROOT
+
+    text = (DATASETS / "corexy_nonlinear.toml").read_text() + (
+        '\n[tool]\nkind = "servo"\npen_z_um = 300\nservo_up_deg = 100\nservo_down_deg = 20\n')
+    toml = tmp_path / "pen.toml"
+    toml.write_text(text)
+    scn = load_scenario(toml)
+    cfg = default_machine(scn)
+    assert (cfg.tool, cfg.pen_z_um, cfg.servo_up_deg, cfg.servo_down_deg) == ("servo", 300, 100, 20)
+    assert scn.fingerprint == load_scenario(DATASETS / "corexy_nonlinear.toml").fingerprint  # no retraining
+    env = Environment(loader=FileSystemLoader(ROOT / "codegen" / "arduino" / "templates"))
+    h = env.get_template("gcode_config.h.j2").render(name="m", origin=[0, 0], seg_um=500, tick_hz=10000,
+                                                     rapid_um_min=1, feed_um_min=1, tool=cfg.tool,
+                                                     tool_defines=cfg.defines())
+    for key, value in cfg.defines().items():
+        assert f"#ifndef {key}\n#define {key} {value} " in h
+    assert "#define NNIK_GC_TOOL 1 " in h and "#define NNIK_GC_TOOL_CS 7 " in h
+    assert job_machine(["; nnik-machine: tool=laser"], cfg, "j").tool == "laser"
+
+
+def test_a_bad_tool_table_is_one_line(tmp_path, capsys):
+    from tests.bad_input import GALVO, fails
+
+    toml = tmp_path / "t.toml"
+    toml.write_text(GALVO + '\n[tool]\nkind = "plasma"\n')
+    fails(capsys, ["generate", toml, "-o", tmp_path / "o"], "[tool] kind", "laser, pen, servo")
