@@ -74,7 +74,8 @@ def export_arduino(outdir: Path, libdir: Path, machine: MachineConfig | None = N
                shape=c_comment_safe(what).replace('"', "'"),
                description=c_comment_safe(scn.raw.get("description") or name), unit=scn.unit, outputs=scn.outputs, model_hash=hash_,
                origin=list(machine.origin_um), seg_um=machine.seg_um, tick_hz=machine.tick_hz, homepage=homepage(),
-               rapid_um_min=machine.rapid_um_min, feed_um_min=machine.feed_um_min, rows=rows, n=len(rows))
+               rapid_um_min=machine.rapid_um_min, feed_um_min=machine.feed_um_min, rows=rows, n=len(rows),
+               tool=machine.tool, tool_defines=machine.defines())
     env = _env()
     files = {
         libdir / "library.properties": "library.properties.j2",

@@ -48,6 +48,7 @@ TOP = {
     "training": Param("table", default={}),
     "export": Param("table", default={}),
     "target": Param("table", default={}),
+    "tool": Param("table", default={}),
 }
 def _extent(v):
     return None if max(abs(v[0]), abs(v[1])) <= MAX_LENGTH_MM else f"must lie within +/-{MAX_LENGTH_MM:g} mm, got {list(v)}"
@@ -96,6 +97,18 @@ TARGET = {
 }
 
 
+TOOL = {  # the G-code firmware's tool on D11 (nnik.firmware.config.MachineConfig)
+    "kind": Param("str", default="laser", choices=("laser", "pen", "servo"),
+                  doc="laser: M3/M4/M5 with S; pen: Z above pen_z_um lifts it; servo: the same, as a servo angle"),
+    "s_max": Param("int", default=1000, check=lambda v: None if 1 <= v <= 9999 else f"must be in [1, 9999], got {v}",
+                   doc="S of full laser power (grbl's $30)"),
+    "pen_z_um": Param("int", default=0, check=lambda v: None if abs(v) <= 1_000_000 else f"must be within +/-1 m, got {v}",
+                      doc="Z above this (um) lifts the pen"),
+    "servo_up_deg": Param("int", default=90, check=lambda v: None if 0 <= v <= 180 else f"must be in [0, 180], got {v}"),
+    "servo_down_deg": Param("int", default=30, check=lambda v: None if 0 <= v <= 180 else f"must be in [0, 180], got {v}"),
+}
+
+
 def training_memory_bytes(n_rows: int, n_val: int, n_test: int, hidden: tuple[int, ...]) -> int:
     """Estimated peak of the training tensors: every layer's float64 activations, their tanh and
     their gradients over the full batch (train and validation), plus the test-set prediction."""
@@ -125,6 +138,7 @@ class Scenario:
     training: dict
     export: dict
     target: dict
+    tool: dict
 
     @property
     def outputs(self) -> list[str]:
@@ -133,13 +147,13 @@ class Scenario:
     @property
     def fingerprint(self) -> str:
         """Hash of what the data and the trained model depend on: the TOML tables other than
-        [export], [target] and the description, and for measured data the CSV's bytes. data.npz
+        [export], [target], [tool] and the description, and for measured data the CSV's bytes. data.npz
         and model.pt carry it, so every stage can tell they belong together; changing the
         target or the export options needs no new data."""
         import hashlib
         import json
 
-        kept = {k: v for k, v in self.raw.items() if k not in ("export", "target", "description")}
+        kept = {k: v for k, v in self.raw.items() if k not in ("export", "target", "tool", "description")}
         h = hashlib.sha256(json.dumps(kept, sort_keys=True, default=str).encode())
         csv = getattr(self.mechanism, "csv_path", None)
         if csv is not None and Path(csv).is_file():
@@ -203,6 +217,7 @@ class Scenario:
         training = validate_table(top["training"], TRAINING, source, "training")
         export = validate_table(top["export"], EXPORT, source, "export")
         target = validate_table(top["target"], TARGET, source, "target")
+        tool = validate_table(top["tool"], TOOL, source, "tool")
         if export["tanh"] != "default":
             from nnik.implementations.mlp.tanh import VARIANTS
 
@@ -221,6 +236,7 @@ class Scenario:
             training=training,
             export=export,
             target=target,
+            tool=tool,
         )
 
 

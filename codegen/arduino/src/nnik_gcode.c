@@ -25,6 +25,12 @@
 #define MIN_FEED 1000L       /* um per minute */
 #define ARC_STACK 32
 #define TICKS_PER_UM_MIN (60UL * NNIK_GC_TICK_HZ)
+#define TOOL_SCALED 0x100 /* a tool word: duty | TOOL_SCALED (M4: duty * the segment's speed / feed) */
+#define S_FULL (NNIK_GC_S_MAX * 1000L) /* S at full power, in thousandths */
+
+#if NNIK_GC_S_MAX < 1 || NNIK_GC_S_MAX > 9999
+#error "NNIK_GC_S_MAX must be 1..9999"
+#endif
 
 static NNIK_FLASH const char M_LONG[] = "line too long";
 static NNIK_FLASH const char M_COMMENT[] = "unterminated comment";
@@ -56,6 +62,9 @@ static NNIK_FLASH const char M_AXES[] = "G%d needs X or Y";
 static NNIK_FLASH const char M_WITH[] = "G%d with a motion command";
 static NNIK_FLASH const char M_DWELL[] = "G4 needs P >= 0";
 static NNIK_FLASH const char M_P[] = "P needs G4";
+static NNIK_FLASH const char M_TOOL2[] = "two tool commands";
+static NNIK_FLASH const char M_NEG[] = "negative %c";
+static NNIK_FLASH const char M_ZG[] = "Z needs G0 to G3";
 
 /* message = flash template with %c -> ch, %d -> num */
 static int8_t fail(nnik_gc_t *g, const char *tmpl, char ch, int32_t num)
@@ -130,6 +139,11 @@ void nnik_gc_init(nnik_gc_t *g, nnik_gc_emit_fn emit)
     g->segments = 0;
     g->clamped = 0;
     g->motion = 0;
+    g->spindle = 0;
+    g->s = 0;
+    g->z = 0;
+    g->tool = g->last_tool = 0;
+    g->duty = 0;
     g->inch = 0;
     g->relative = 0;
     g->emit = emit;
@@ -149,7 +163,7 @@ static int32_t iabs32(int32_t v) { return v < 0 ? -v : v; }
 static void seg_to(nnik_gc_t *g, int32_t x, int32_t y, int32_t feed)
 {
     int32_t in[2], out[2], d[2], dx, dy;
-    uint32_t len, ticks, a;
+    uint32_t len, ticks, tt, a;
     dx = x - g->pos[0];
     dy = y - g->pos[1];
     len = nnik_isqrt32((uint32_t)(dx * dx) + (uint32_t)(dy * dy));
@@ -159,7 +173,7 @@ static void seg_to(nnik_gc_t *g, int32_t x, int32_t y, int32_t feed)
         g->clamped++;
     d[0] = out[0] - g->steps[0];
     d[1] = out[1] - g->steps[1];
-    ticks = (len * TICKS_PER_UM_MIN + (uint32_t)feed - 1) / (uint32_t)feed;
+    tt = ticks = (len * TICKS_PER_UM_MIN + (uint32_t)feed - 1) / (uint32_t)feed;
     a = (uint32_t)iabs32(d[0]);
     if (ticks < a)
         ticks = a;
@@ -168,6 +182,10 @@ static void seg_to(nnik_gc_t *g, int32_t x, int32_t y, int32_t feed)
         ticks = a;
     if (ticks == 0)
         ticks = 1;
+    g->duty = (uint8_t)g->tool;
+    if (g->tool & TOOL_SCALED) /* M4: the power follows the segment's speed (tt / ticks <= 1) */
+        g->duty = (uint8_t)((uint32_t)(uint8_t)g->tool * tt / ticks);
+    g->last_tool = g->tool;
     g->pos[0] = x;
     g->pos[1] = y;
     g->steps[0] = out[0];
@@ -346,7 +364,7 @@ typedef struct {
     uint32_t fr;
 } num_t;
 
-enum { W_X, W_Y, W_I, W_J, W_R, W_F, W_P, W_COUNT };
+enum { W_X, W_Y, W_I, W_J, W_R, W_F, W_P, W_S, W_Z, W_COUNT };
 
 /* scan [+-]digits[.digits] at *ps; 0 or an error template */
 static const char *scan_num(const char **ps, num_t *n)
@@ -368,7 +386,7 @@ static const char *scan_num(const char **ps, num_t *n)
         s++;
         n->dot = 1;
         while (*s >= '0' && *s <= '9') {
-            if (n->nd == 5)
+            if (n->nd == 6)
                 return M_DEC;
             n->fr = n->fr * 10 + (uint32_t)(*s++ - '0');
             n->nd++;
@@ -390,7 +408,10 @@ static int32_t to_um(const num_t *n, uint8_t inch)
     int32_t v;
     for (k = 0; k < n->nd; k++)
         p *= 10;
-    f = (n->fr * scale + p / 2) / p;
+    if (n->nd < 6)
+        f = (n->fr * scale + p / 2) / p;
+    else /* six decimals (Inkscape's gcodetools writes %f): fr * 25400 needs 35 bits */
+        f = (uint32_t)(((uint64_t)n->fr * scale + p / 2) / p);
     v = (int32_t)((uint32_t)n->ip * scale + f);
     return n->neg ? -v : v;
 }
@@ -399,6 +420,42 @@ static int32_t to_um(const num_t *n, uint8_t inch)
 static uint32_t dwell_ticks(uint32_t ms)
 {
     return ms / 1000 * NNIK_GC_TICK_HZ + ms % 1000 * NNIK_GC_TICK_HZ / 1000;
+}
+
+/* a segment without steps: ticks of the stepper at rest with the tool word t (fixed) */
+static void rest(nnik_gc_t *g, uint32_t ticks, uint16_t t)
+{
+    int32_t d[2] = {0, 0};
+    g->tool = g->last_tool = t;
+    g->duty = (uint8_t)t;
+    g->segments++;
+    g->emit(g, d, ticks);
+}
+
+/* the tool word at rest (laser: off, as grbl's laser mode; pen: up or down by Z) */
+static uint16_t idle_tool(const nnik_gc_t *g)
+{
+#if NNIK_GC_TOOL == 1
+    return g->z > NNIK_GC_PEN_Z_UM ? NNIK_GC_PEN_UP_DUTY : NNIK_GC_PEN_DOWN_DUTY;
+#else
+    (void)g;
+    return 0;
+#endif
+}
+
+/* the tool word of a move (laser: off for rapids and M5, S's duty for M3, scaled for M4) */
+static uint16_t move_tool(const nnik_gc_t *g, uint8_t rapid)
+{
+#if NNIK_GC_TOOL == 1
+    (void)rapid;
+    return idle_tool(g);
+#else
+    uint16_t t;
+    if (rapid || !g->spindle)
+        return 0;
+    t = (uint16_t)((uint32_t)(g->s < S_FULL ? g->s : S_FULL) * 255UL / (uint32_t)S_FULL);
+    return g->spindle == 4 ? t | TOOL_SCALED : t;
+#endif
 }
 
 /* '*nn' at s: the checksum; 0 or an error template */
@@ -418,6 +475,15 @@ static const char *checksum(const char *s, uint8_t x)
     return v == x ? 0 : M_SUM;
 }
 
+static void tool_state(nnik_gc_t *g, const num_t *s, uint8_t spindle, int32_t z)
+{
+    if (s->have)
+        g->s = to_um(s, 0);
+    if (spindle != 0xff)
+        g->spindle = spindle == 5 ? 0 : spindle;
+    g->z = z;
+}
+
 int8_t nnik_gc_line(nnik_gc_t *g, const char *line)
 {
     char buf[NNIK_GC_LINE_MAX + 1];
@@ -425,8 +491,10 @@ int8_t nnik_gc_line(nnik_gc_t *g, const char *line)
     const char *err;
     uint8_t i = 0, in_comment = 0, wait = 0, motion = 0xff, inch = g->inch, rel = g->relative, x = 0;
     uint8_t nonmodal = 0; /* 4, 28, 92 */
+    uint8_t spindle = 0xff;  /* M3, M4, M5 */
+    uint32_t seg0 = g->segments;
     num_t w[W_COUNT];
-    int32_t tgt[2], feed;
+    int32_t tgt[2], feed, tz;
     char c;
 
     g->line_no++;
@@ -461,6 +529,8 @@ int8_t nnik_gc_line(nnik_gc_t *g, const char *line)
 
     for (i = 0; i < W_COUNT; i++)
         w[i].have = 0;
+    if (buf[0] == '%' && !buf[1])
+        return 0; /* a program's first or last line ('%'), as CAM posts write it */
     for (s = buf; *s;) {
         num_t n;
         char letter = *s++;
@@ -475,6 +545,10 @@ int8_t nnik_gc_line(nnik_gc_t *g, const char *line)
         case 'R': idx = W_R; break;
         case 'F': idx = W_F; break;
         case 'P': idx = W_P; break;
+        case 'S': idx = W_S; break;
+#if NNIK_GC_TOOL == 1
+        case 'Z': idx = W_Z; break;
+#endif
         case 'N': /* a line number: up to 8 digits, read and ignored */
             for (i = 0; *s >= '0' && *s <= '9'; s++)
                 if (++i > 8)
@@ -527,6 +601,10 @@ int8_t nnik_gc_line(nnik_gc_t *g, const char *line)
             wait |= 1;
         } else if (n.ip <= 1) {
             return fail(g, M_PAUSE, 0, n.ip);
+        } else if (n.ip >= 3 && n.ip <= 5) {
+            if (spindle != 0xff)
+                return fail(g, M_TOOL2, 0, 0);
+            spindle = (uint8_t)n.ip;
         } else {
             return fail(g, M_CMD, letter, n.ip);
         }
@@ -537,6 +615,10 @@ int8_t nnik_gc_line(nnik_gc_t *g, const char *line)
         return fail(g, M_WITH, 0, nonmodal);
     if (w[W_P].have && nonmodal != 4)
         return fail(g, M_P, 0, 0);
+    if (w[W_S].have && w[W_S].neg)
+        return fail(g, M_NEG, 'S', 0);
+    if (w[W_Z].have && nonmodal)
+        return fail(g, M_ZG, 0, 0);
     if (motion == 0xff)
         motion = g->motion;
     feed = g->feed;
@@ -557,6 +639,16 @@ int8_t nnik_gc_line(nnik_gc_t *g, const char *line)
         }
         if (tgt[i] > POS_LIMIT || tgt[i] < -POS_LIMIT)
             return fail(g, M_RANGE, 0, 0);
+    }
+    {
+        int32_t z = g->z;
+        if (w[W_Z].have) {
+            int32_t v = to_um(&w[W_Z], inch);
+            z = rel ? z + v : v;
+            if (z > POS_LIMIT || z < -POS_LIMIT)
+                return fail(g, M_RANGE, 0, 0);
+        }
+        tz = z;
     }
     if (nonmodal) {
         uint8_t xy = w[W_X].have || w[W_Y].have;
@@ -580,14 +672,13 @@ int8_t nnik_gc_line(nnik_gc_t *g, const char *line)
         g->inch = inch;
         g->relative = rel;
         g->feed = feed;
+        tool_state(g, &w[W_S], spindle, tz);
         if (nonmodal == 4) {
             uint32_t t = dwell_ticks((uint32_t)v);
-            if (t) {
-                int32_t d[2] = {0, 0};
-                g->segments++;
-                g->emit(g, d, t);
-            }
+            if (t)
+                rest(g, t, idle_tool(g));
         } else if (nonmodal == 28) { /* via X Y (if given), then home: where the motors started */
+            g->tool = move_tool(g, 1);
             line_to(g, tgt[0], tgt[1], NNIK_GC_RAPID_UM_MIN);
             for (i = 0; i < 2; i++)
                 if (w[i].have || !xy)
@@ -637,7 +728,9 @@ int8_t nnik_gc_line(nnik_gc_t *g, const char *line)
         g->relative = rel;
         g->motion = motion;
         g->feed = feed;
+        tool_state(g, &w[W_S], spindle, tz);
         if (axes) {
+            g->tool = move_tool(g, motion == 0);
             int32_t f = motion == 0 ? (int32_t)NNIK_GC_RAPID_UM_MIN : feed;
             if (motion >= 2)
                 arc_to(g, c2, tgt, r, motion == 3 ? 1 : -1, f);
@@ -648,6 +741,13 @@ int8_t nnik_gc_line(nnik_gc_t *g, const char *line)
     if (wait & 2) { /* M2/M30 end the program as grbl: G1, G90 */
         g->motion = 1;
         g->relative = 0;
+        g->spindle = 0;
     }
+    /* a tool word that turns a laser off (M5, S0, M2/M30) or moves the pen, and no segment on
+     * this line: the tool changes on the next tick, by a one-tick segment without steps, if the
+     * last segment left it otherwise (a new power alone waits for the next cut) */
+    if ((spindle != 0xff || w[W_S].have || w[W_Z].have || (wait & 2)) && g->segments == seg0 &&
+        g->last_tool != idle_tool(g) && (NNIK_GC_TOOL == 1 || move_tool(g, 0) == 0))
+        rest(g, 1, idle_tool(g));
     return (int8_t)(wait & 1);
 }

@@ -45,6 +45,12 @@ struct nnik_gc {
     uint32_t line_no;    /* lines seen (1 = the first) */
     uint32_t segments;   /* segments emitted */
     uint32_t clamped;    /* segment ends the IK clamped to its domain */
+    int32_t s;           /* S in thousandths (laser power; NNIK_GC_S_MAX = full) */
+    int32_t z;           /* Z, um (pen machines: above NNIK_GC_PEN_Z_UM the pen is up) */
+    uint16_t tool;       /* the tool word of the segments being cut: duty, | 0x100 for M4 */
+    uint16_t last_tool;  /* the tool word of the last segment emitted */
+    uint8_t duty;        /* the tool's duty (0..255) for the segment handed to emit() */
+    uint8_t spindle;     /* 0 (M5), 3 (M3), 4 (M4) */
     uint8_t motion;      /* 0..3 */
     uint8_t inch;
     uint8_t relative;

@@ -11,6 +11,8 @@
  *                           pin level then (PD5, PD6)
  *   M <cycle>               the segment marker (PD4) changed: a segment started
  *   B <cycle> <0|1>         the busy pin (PB0): a segment is being computed
+ *   T <cycle> <duty>        the tool's PWM on D11 (Timer2's OCR2A, as simavr's timer reports
+ *                           it in fast PWM mode) changed
  *   E <cycle> <state> <replies>   the end (state: "done", "halted", "timeout", "crashed")
  *
  * usage: nnik_simavr_job FIRMWARE.elf JOB_LINES MAX_SECONDS
@@ -29,6 +31,7 @@
 #include <simavr/sim_irq.h>
 #include <simavr/avr_ioport.h>
 #include <simavr/avr_uart.h>
+#include <simavr/avr_timer.h>
 
 #define CLOCK_HZ 16000000UL
 #define DRAIN "M400\n"
@@ -42,6 +45,7 @@ static int pin_state[2][8];   /* [port B, D][bit]: last level seen */
 static char out_line[256];
 static size_t out_len;
 static unsigned long long idle_fall; /* the motion pin's last falling edge */
+static int duty_seen;                /* the tool's last duty (0 at reset) */
 
 static void pump(void)
 {
@@ -117,6 +121,15 @@ static void on_pin(struct avr_irq_t *irq, uint32_t value, void *param)
         printf("B %llu %u\n", (unsigned long long)avr->cycle, value);
 }
 
+static void on_pwm(struct avr_irq_t *irq, uint32_t value, void *param)
+{
+    (void)irq; (void)param;
+    if ((int)value == duty_seen)
+        return;
+    duty_seen = (int)value;
+    printf("T %llu %u\n", (unsigned long long)avr->cycle, value);
+}
+
 static void watch(char port, int bit, int code)
 {
     avr_irq_t *irq = avr_io_getirq(avr, AVR_IOCTL_IOPORT_GETIRQ(port), bit);
@@ -182,6 +195,7 @@ int main(int argc, char **argv)
     for (i = 2; i <= 7; i++)
         watch('D', i, 8 + i);
     watch('B', 0, 0);
+    avr_irq_register_notify(avr_io_getirq(avr, AVR_IOCTL_TIMER_GETIRQ('2'), TIMER_IRQ_OUT_PWM0), on_pwm, NULL);
 
     for (;;) {
         rc = avr_run(avr);

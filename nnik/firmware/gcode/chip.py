@@ -99,14 +99,15 @@ class Firmware:
     ram_bytes: int
 
 
-def build_sketch(libdir: Path, example: str, workdir: Path) -> Firmware:
-    """Compile examples/EXAMPLE/EXAMPLE.ino with the library's src/ and the core; link; size."""
+def build_sketch(libdir: Path, example: str, workdir: Path, defines: dict | None = None) -> Firmware:
+    """Compile examples/EXAMPLE/EXAMPLE.ino with the library's src/ and the core; link; size.
+    defines: macros for the sketch and src/ (the tool's, MachineConfig.defines())."""
     libdir, workdir = _absolute(libdir, workdir)
     core = build_core(workdir)
     sketch = libdir / "examples" / example / f"{example}.ino"
     bdir = workdir / example
     bdir.mkdir(parents=True, exist_ok=True)
-    inc = [f"-I{libdir / 'src'}"]
+    inc = [f"-I{libdir / 'src'}", *(f"-D{k}={v}" for k, v in (defines or {}).items())]
     objs = [_compile(sketch, bdir / f"{example}.ino.o", inc, bdir)]
     for src in sorted((libdir / "src").glob("*.c")):
         objs.append(_compile(src, bdir / f"{src.name}.o", inc, bdir))
@@ -148,10 +149,11 @@ class ChipRun:
     end_cycle: int
     state: str
     idle_cycle: int = 0  # the motion pin's last fall before the drain answer: the true end; 0: no motion
+    tool: np.ndarray | None = None  # (T, 2) int64: cycle, duty of every change of the tool's PWM (D11)
 
 
 def parse_events(text: str) -> ChipRun:
-    replies, steps, marks, busy_edges = [], [], [], []
+    replies, steps, marks, busy_edges, tool = [], [], [], [], []
     end_cycle, state, idle_cycle = 0, "missing", 0
     for line in text.splitlines():
         tag, _, rest = line.partition(" ")
@@ -166,6 +168,9 @@ def parse_events(text: str) -> ChipRun:
         elif tag == "B":
             c, v = rest.split()
             busy_edges.append((int(c), int(v)))
+        elif tag == "T":
+            c, v = rest.split()
+            tool.append((int(c), int(v)))
         elif tag == "D":
             idle_cycle = int(rest.partition(" ")[0])
         elif tag == "E":
@@ -176,7 +181,7 @@ def parse_events(text: str) -> ChipRun:
     n = min(len(rises), len(falls))
     return ChipRun(replies, np.asarray(steps, dtype=np.int64).reshape(-1, 3), np.asarray(marks, dtype=np.int64),
                    np.stack([rises[:n], falls[:n]], 1).astype(np.int64) if n else np.zeros((0, 2), np.int64),
-                   end_cycle, state, idle_cycle)
+                   end_cycle, state, idle_cycle, np.asarray(tool, dtype=np.int64).reshape(-1, 2))
 
 
 def run_firmware(fw: Firmware, lines: list[str], workdir: Path, max_seconds: float) -> ChipRun:

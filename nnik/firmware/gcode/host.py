@@ -18,14 +18,15 @@ from nnik.targets.host import HOST_FLAGS
 DRIVER = HARNESS_DIR / "arduino" / "nnik_gcode_host.c"
 
 
-def run_engine_host(libdir: Path, name: str, lines: list[str], cc: str = "gcc") -> dict:
-    """{"start": steps (2,), "segments": (S, 5) d0 d1 ticks x y, "replies": [...]} for the lines."""
+def run_engine_host(libdir: Path, name: str, lines: list[str], cc: str = "gcc", defines: dict | None = None) -> dict:
+    """{"start": steps (2,), "segments": (S, 6) d0 d1 ticks x y duty, "replies": [...]} for the
+    lines; defines: the config's tool macros (MachineConfig.defines())."""
     if shutil.which(cc) is None:
         raise NnikError(f"host C compiler {cc!r} not found")
     src = Path(libdir) / "src"
     with tempfile.TemporaryDirectory() as tmp:
         exe = Path(tmp) / "engine"
-        cmd = [cc, *HOST_FLAGS, f"-I{src}", str(DRIVER), str(src / "nnik_gcode.c"), str(src / f"{name}.c"), "-o", str(exe)]
+        cmd = [cc, *HOST_FLAGS, *(f"-D{k}={v}" for k, v in (defines or {}).items()), f"-I{src}", str(DRIVER), str(src / "nnik_gcode.c"), str(src / f"{name}.c"), "-o", str(exe)]
         r = subprocess.run(cmd, capture_output=True, text=True)
         if r.returncode != 0:
             raise NnikError(f"host build of the G-code engine failed: {r.stderr.strip()[:300]}")
@@ -42,4 +43,4 @@ def run_engine_host(libdir: Path, name: str, lines: list[str], cc: str = "gcc") 
             segs.append([int(v) for v in rest.split()])
         elif tag == "R":
             replies.append(rest)
-    return {"start": start, "segments": np.asarray(segs, dtype=np.int64).reshape(-1, 5), "replies": replies}
+    return {"start": start, "segments": np.asarray(segs, dtype=np.int64).reshape(-1, 6), "replies": replies}

@@ -15,6 +15,7 @@ from nnik.firmware.config import MachineConfig
 from nnik.firmware.gcode.parse import GcodeLineError, parse_line
 
 POS_LIMIT = 2**28 - 1  # um
+TOOL_SCALED = 0x100  # a tool word: duty | TOOL_SCALED (M4: duty * the segment's speed / feed)
 MIN_FEED = 1000  # um/min
 ARC_STACK = 32
 
@@ -42,7 +43,8 @@ class Plan:
     ends: list[tuple[int, int]] = field(default_factory=list)  # program um
     chord: list[int] = field(default_factory=list)  # floor length of each segment, um
     feed: list[int] = field(default_factory=list)  # um/min used for its ticks
-    dwell: list[int] = field(default_factory=list)  # G4: its ticks (no steps); 0: a move
+    dwell: list[int] = field(default_factory=list)  # G4 or a tool change: its ticks (no steps); 0: a move
+    tool: list[int] = field(default_factory=list)  # the tool word of each segment
     moves: list[Move] = field(default_factory=list)
     replies: list[str] = field(default_factory=list)  # "ok" or "error: line N: ..."
 
@@ -88,6 +90,8 @@ class Interpreter:
         self.cfg = cfg
         self.pos = (0, 0)
         self.off = (0, 0)  # G92: machine position (less the work origin) = pos + off
+        self.spindle, self.s, self.z = 0, 0, 0  # M3/M4/M5 (0: off), S in thousandths, Z um
+        self.tool = self.last_tool = 0
         self.feed = cfg.feed_um_min
         self.motion = 0
         self.inch = False
@@ -102,15 +106,46 @@ class Interpreter:
         self.plan.chord.append(isqrt(dx * dx + dy * dy))
         self.plan.feed.append(feed)
         self.plan.dwell.append(0)
+        self.plan.tool.append(self.tool)
+        self.last_tool = self.tool
         self.pos = (x, y)
+
+    def _rest(self, ticks: int, tool: int) -> None:
+        """A segment without steps (a dwell, a tool change) with a fixed tool word."""
+        self.plan.ends.append((self.pos[0] + self.off[0], self.pos[1] + self.off[1]))
+        self.plan.chord.append(0)
+        self.plan.feed.append(self.feed)
+        self.plan.dwell.append(ticks)
+        self.plan.tool.append(tool)
+        self.tool = self.last_tool = tool
 
     def _dwell(self, ms: int) -> None:
         t = ms // 1000 * self.cfg.tick_hz + ms % 1000 * self.cfg.tick_hz // 1000
         if t:
-            self.plan.ends.append((self.pos[0] + self.off[0], self.pos[1] + self.off[1]))
-            self.plan.chord.append(0)
-            self.plan.feed.append(self.feed)
-            self.plan.dwell.append(t)
+            self._rest(t, self.idle_tool())
+
+    def idle_tool(self) -> int:
+        """The tool word at rest: laser off (grbl's laser mode); pen up or down by Z."""
+        if self.cfg.tool == "laser":
+            return 0
+        return self.cfg.pen_duty(self.z <= self.cfg.pen_z_um)
+
+    def move_tool(self, rapid: bool) -> int:
+        """The tool word of a move: off for rapids and M5, S's duty for M3, scaled for M4."""
+        if self.cfg.tool != "laser":
+            return self.idle_tool()
+        if rapid or not self.spindle:
+            return 0
+        full = self.cfg.s_max * 1000
+        t = min(self.s, full) * 255 // full
+        return t | TOOL_SCALED if self.spindle == 4 else t
+
+    def _tool_state(self, w, z: int) -> None:
+        if "S" in w.values:
+            self.s = w.values["S"].to_um(False)
+        if w.spindle is not None:
+            self.spindle = 0 if w.spindle == 5 else w.spindle
+        self.z = z
 
     def _move(self, motion: int, tgt, c=None, r: int = 0, feed: int = 0) -> None:
         """A line (motion 0/1) or an arc to tgt, recorded as a Move in the machine frame less
@@ -181,13 +216,18 @@ class Interpreter:
         return reply
 
     def _line(self, text: str) -> None:
-        w = parse_line(text)
+        w = parse_line(text, pen=self.cfg.tool != "laser")
         nm = w.nonmodal
         if nm and w.motion is not None:
             raise GcodeLineError(f"G{nm} with a motion command")
         v = w.values
         if "P" in v and nm != 4:
             raise GcodeLineError("P needs G4")
+        if "S" in v and v["S"].neg:
+            raise GcodeLineError("negative S")
+        if "Z" in v and nm:
+            raise GcodeLineError("Z needs G0 to G3")
+        seg0 = len(self.plan.ends)
         inch = self.inch if w.inch is None else w.inch
         rel = self.relative if w.relative is None else w.relative
         motion = self.motion if w.motion is None else w.motion
@@ -207,14 +247,26 @@ class Interpreter:
                 tgt[k] = self.pos[k] + val if rel and nm != 92 else val
             if abs(tgt[k]) > POS_LIMIT:
                 raise GcodeLineError("coordinate out of range")
+        z = self.z
+        if "Z" in v:
+            z = z + v["Z"].to_um(inch) if rel else v["Z"].to_um(inch)
+            if abs(z) > POS_LIMIT:
+                raise GcodeLineError("coordinate out of range")
         if nm:
-            self._nonmodal(w, nm, tgt, inch, rel, feed)
+            self._nonmodal(w, nm, tgt, inch, rel, feed, z)
         else:
-            self._motion(w, tgt, inch, rel, motion, feed)
-        if w.end:  # M2/M30 end the program as grbl: G1, G90
-            self.motion, self.relative = 1, False
+            self._motion(w, tgt, inch, rel, motion, feed, z)
+        if w.end:  # M2/M30 end the program as grbl: G1, G90, M5
+            self.motion, self.relative, self.spindle = 1, False, 0
+        # a tool word that turns a laser off (M5, S0, M2/M30) or moves the pen, and no segment on
+        # this line: the tool changes on the next tick, by a one-tick segment without steps, if the
+        # last segment left it otherwise (a new power alone waits for the next cut)
+        toolword = w.spindle is not None or "S" in v or "Z" in v or w.end
+        if (toolword and len(self.plan.ends) == seg0 and self.last_tool != self.idle_tool()
+                and (self.cfg.tool != "laser" or self.move_tool(False) == 0)):
+            self._rest(1, self.idle_tool())
 
-    def _nonmodal(self, w, nm: int, tgt: list[int], inch: bool, rel: bool, feed: int) -> None:
+    def _nonmodal(self, w, nm: int, tgt: list[int], inch: bool, rel: bool, feed: int, z: int) -> None:
         v = w.values
         xy = "X" in v or "Y" in v
         ms = v["P"].to_um(False) if "P" in v else -1
@@ -228,15 +280,17 @@ class Interpreter:
                 raise GcodeLineError("coordinate out of range")
             self.off, self.pos = off, tuple(tgt)
         self.inch, self.relative, self.feed = inch, rel, feed
+        self._tool_state(w, z)
         if nm == 4:
             self._dwell(ms)
         elif nm == 28:  # via X Y (if given), then home: where the motors started
             rapid = self.cfg.rapid_um_min
+            self.tool = self.move_tool(True)
             self._move(0, tgt, feed=rapid)
             home = [-self.off[k] if ("XY"[k] in v or not xy) else tgt[k] for k in range(2)]
             self._move(0, home, feed=rapid)
 
-    def _motion(self, w, tgt: list[int], inch: bool, rel: bool, motion: int, feed: int) -> None:
+    def _motion(self, w, tgt: list[int], inch: bool, rel: bool, motion: int, feed: int, z: int) -> None:
         v = w.values
         axes = any(a in v for a in "XYIJR")
         c, r = None, 0
@@ -264,7 +318,9 @@ class Interpreter:
             if re == 0 or abs(re - r) > 5 + r // 1000:
                 raise GcodeLineError("arc end is off the circle")
         self.inch, self.relative, self.motion, self.feed = inch, rel, motion, feed
+        self._tool_state(w, z)
         if axes:
+            self.tool = self.move_tool(motion == 0)
             self._move(motion, tgt, c, r, self.cfg.rapid_um_min if motion == 0 else feed)
 
 
@@ -277,6 +333,8 @@ class Segments:
     delta: np.ndarray  # (S, 2)
     ticks: np.ndarray  # (S,)
     clamped: np.ndarray  # (S,) 1 where the IK clamped the end to its domain
+    duty: np.ndarray | None = None  # (S,) the tool's duty (OCR2A, 0..255) during each segment
+    chord: np.ndarray | None = None  # (S,) floor length of each segment, um
 
 
 def plan_steps(plan: Plan, cfg: MachineConfig, ik) -> Segments:
@@ -289,10 +347,14 @@ def plan_steps(plan: Plan, cfg: MachineConfig, ik) -> Segments:
     chord = np.asarray(plan.chord, dtype=np.int64)
     feed = np.asarray(plan.feed, dtype=np.int64)
     ticks = (chord * 60 * cfg.tick_hz + feed - 1) // feed
+    tt = ticks
     ticks = np.maximum.reduce([ticks, np.abs(delta[:, 0]), np.abs(delta[:, 1]), np.ones_like(ticks)])
     dwell = np.asarray(plan.dwell, dtype=np.int64)
     ticks = np.where(dwell > 0, dwell, ticks)
-    return Segments(ends, out, delta, ticks, np.asarray(flags, dtype=np.int64)[1:])
+    tool = np.asarray(plan.tool, dtype=np.int64)
+    base = tool & 0xFF
+    duty = np.where(tool & TOOL_SCALED, base * tt // ticks, base)  # M4: duty * speed / feed
+    return Segments(ends, out, delta, ticks, np.asarray(flags, dtype=np.int64)[1:], duty, chord)
 
 
 def interpret(lines: list[str], cfg: MachineConfig) -> Plan:

@@ -12,8 +12,8 @@ from dataclasses import dataclass, field
 
 LINE_MAX = 95  # characters per line, comments included (NNIK_GC_LINE_MAX)
 INT_DIGITS_MAX = 9999
-DECIMALS_MAX = 5
-AXIS_LETTERS = "XYIJRFP"
+DECIMALS_MAX = 6
+AXIS_LETTERS = "XYIJRFPSZ"
 N_DIGITS_MAX = 8
 ACCEPTED_MODES = (17, 40, 49, 54, 64, 80, 94)  # the only plane, compensation, system, path, feed mode
 
@@ -50,6 +50,7 @@ class Words:
     relative: bool | None = None
     wait: bool = False
     end: bool = False  # M2/M30
+    spindle: int | None = None  # M3, M4, M5
     nonmodal: int = 0  # 4, 28, 92
 
 
@@ -121,17 +122,20 @@ def scan_num(s: str, i: int, letter: str) -> tuple[Num, int]:
     return Num(neg, dot, ip, fr, nd), i
 
 
-def parse_line(line: str) -> Words:
-    """Words of one line (without its newline); GcodeLineError names what is wrong."""
+def parse_line(line: str, pen: bool = False) -> Words:
+    """Words of one line (without its newline); GcodeLineError names what is wrong. Z is a word
+    only on pen machines (MachineConfig.tool "pen" or "servo")."""
     s = clean(line)
     w = Words()
+    if s == "%":  # a program's first or last line, as CAM posts write it
+        return w
     i = 0
     while i < len(s):
         letter = s[i]
         i += 1
         if not "A" <= letter <= "Z":
             raise GcodeLineError("unexpected character")
-        if letter not in AXIS_LETTERS + "NGM":
+        if letter not in AXIS_LETTERS + "NGM" or (letter == "Z" and not pen):
             raise GcodeLineError(f"unsupported word {letter}")
         if letter == "N":  # a line number: up to 8 digits, read and ignored
             k = i
@@ -172,6 +176,10 @@ def parse_line(line: str) -> Words:
             w.end = w.end or n.ip != 400
         elif n.ip <= 1:
             raise GcodeLineError(f"M{n.ip} pause not supported")
+        elif 3 <= n.ip <= 5:
+            if w.spindle is not None:
+                raise GcodeLineError("two tool commands")
+            w.spindle = n.ip
         else:
             raise GcodeLineError(f"unsupported M{n.ip}")
     return w

@@ -34,13 +34,38 @@ def _path_points(plan: Plan, cfg: MachineConfig, n: int = 400) -> list[np.ndarra
     return out
 
 
-def job_png(path: Path, title: str, plan: Plan, cfg: MachineConfig, plot: dict) -> Path:
-    """Left: the path (grey) and the reached positions coloured by contour error; right: the
-    contour error over the job's time."""
+def _tool_runs(seg, cfg: MachineConfig) -> list[tuple[bool, np.ndarray]]:
+    """The segment path (mm, machine frame) cut into runs with the tool on or off."""
+    origin = np.asarray(cfg.origin_um) / 1000.0
+    pts = origin + np.concatenate([[[0, 0]], seg.ends_um]) / 1000.0
+    on = seg.duty != cfg.tool_off_duty
+    runs, k = [], 0
+    while k < len(on):
+        j = k
+        while j < len(on) and on[j] == on[k]:
+            j += 1
+        runs.append((bool(on[k]), pts[k:j + 1]))
+        k = j
+    return runs
+
+
+def job_png(path: Path, title: str, plan: Plan, cfg: MachineConfig, plot: dict, seg=None) -> Path:
+    """Left: the path (with the segments: tool on solid, travel dashed) and the reached positions
+    coloured by contour error; right: the contour error over the job's time."""
     reached_mm, error_um, time_s = plot["reached_mm"], plot["error_um"], plot["time_s"]
     fig, (ax, ax2) = plt.subplots(1, 2, figsize=(11, 4.8), dpi=100, gridspec_kw={"width_ratios": [1.1, 1]})
-    for pts in _path_points(plan, cfg):
-        ax.plot(pts[:, 0], pts[:, 1], color="0.6", lw=0.8, zorder=1)
+    if seg is None or seg.duty is None:
+        for pts in _path_points(plan, cfg):
+            ax.plot(pts[:, 0], pts[:, 1], color="0.6", lw=0.8, zorder=1)
+    else:
+        seen = set()
+        for on, pts in _tool_runs(seg, cfg):
+            label = None if on in seen else ("tool on" if on else "travel")
+            seen.add(on)
+            ax.plot(pts[:, 0], pts[:, 1], color="black" if on else "tab:red", lw=0.9 if on else 0.8,
+                    ls="-" if on else "--", zorder=3, label=label)  # over the reached positions
+        if seen:
+            ax.legend(loc="upper right", fontsize=7)
     if len(reached_mm):
         sc = ax.scatter(reached_mm[:, 0], reached_mm[:, 1], c=error_um, s=5, cmap="viridis", zorder=2)
         fig.colorbar(sc, ax=ax, label="contour error (µm)")

@@ -44,6 +44,26 @@ def chip_events(steps: np.ndarray, marks: np.ndarray, tick_cycles: int) -> np.nd
     return ev[np.lexsort((ev[:, 2], ev[:, 1], ev[:, 0]))]
 
 
+def model_tool_events(seg: Segments) -> np.ndarray:
+    """(T, 3) int64 tool changes: (segment, tick 1, duty) wherever a segment's duty differs
+    from the one before it (0 before the first)."""
+    duty = np.asarray(seg.duty, dtype=np.int64)
+    prev = np.concatenate([[0], duty[:-1]])
+    k = np.flatnonzero(duty != prev)
+    return np.stack([k, np.ones_like(k), duty[k]], 1).reshape(-1, 3)
+
+
+def chip_tool_events(tool: np.ndarray, marks: np.ndarray, tick_cycles: int) -> np.ndarray:
+    """(T, 3) tool changes from the recorded PWM (cycle, duty) and segment-start cycles: the
+    segment and the tick within it in which the duty changed."""
+    tool = np.asarray(tool, dtype=np.int64).reshape(-1, 2)
+    seg = np.searchsorted(marks, tool[:, 0], side="right") - 1
+    if (seg < 0).any():
+        raise ValueError("a tool change before the first segment marker")
+    tick = (tool[:, 0] - marks[seg]) // tick_cycles + 1
+    return np.stack([seg, tick, tool[:, 1]], 1).reshape(-1, 3)
+
+
 def positions(seg: Segments, events: np.ndarray) -> np.ndarray:
     """Actuator counts after each event, (K + 1, 2), from the start command."""
     inc = np.zeros((len(events), 2), np.int64)

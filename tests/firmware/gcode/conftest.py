@@ -30,6 +30,38 @@ def require_chip() -> None:
 
 
 @pytest.fixture(scope="session")
+def tool_firmware(corexy_run, tmp_path_factory):
+    """cfg -> corexy_nonlinear's G-code firmware built for cfg's tool (entries as in firmware),
+    built once per tool setting in a session."""
+    require_chip()
+    pipeline.export(corexy_run)
+    built = {}
+
+    def get(cfg):
+        key = tuple(sorted(cfg.defines().items()))
+        if key not in built:
+            work = tmp_path_factory.mktemp("tool")
+            lib = dict(export_arduino(corexy_run, work / "lib", cfg))
+            fw = chip.build_sketch(work / "lib", "corexy_nonlinear_gcode", work / "build", cfg.defines())
+            built[key] = (corexy_run, lib, fw, ik_oracle(corexy_run), work / "build")
+        entry = built[key]
+        return (entry[0], {**entry[1], "machine": cfg}, *entry[2:])
+
+    return get
+
+
+@pytest.fixture(scope="session")
+def pen_firmware(corexy_run, tool_firmware):
+    """corexy_nonlinear's G-code firmware for a servo pen (Z > 0.25 mm: up)."""
+    from dataclasses import replace
+
+    from nnik.firmware.config import default_machine
+    from nnik.firmware.ik_oracle import load_scenario_of
+
+    return tool_firmware(replace(default_machine(load_scenario_of(corexy_run)), tool="servo", pen_z_um=250))
+
+
+@pytest.fixture(scope="session")
 def firmware(galvo_run, corexy_run, tmp_path_factory):
     """Per scenario: (model dir, library info, the built G-code firmware, the IK oracle, build dir)."""
     require_chip()
@@ -49,7 +81,7 @@ def run_both(entry, lines: list[str]):
     checked to fall when the last segment's last tick is over, however the job ends."""
     from nnik.firmware.gcode.job import CLOCK_HZ
     from nnik.firmware.gcode.motion import interpret, plan_steps
-    from nnik.firmware.gcode.steps import chip_events, model_events
+    from nnik.firmware.gcode.steps import chip_events, chip_tool_events, model_events, model_tool_events
 
     _, lib, fw, ik, work = entry
     cfg = lib["machine"]
@@ -62,6 +94,8 @@ def run_both(entry, lines: list[str]):
     tick = CLOCK_HZ // cfg.tick_hz
     got, want = chip_events(res.steps, res.marks, tick), model_events(seg)
     assert got.shape == want.shape and np.array_equal(got, want)
+    got, want = chip_tool_events(res.tool, res.marks, tick), model_tool_events(seg)
+    assert got.shape == want.shape and np.array_equal(got, want), (got, want)  # each on its segment's first tick
     if len(seg.ticks):
         last_tick = int(res.marks[-1]) + (int(seg.ticks[-1]) - 1) * tick  # the interrupt of its last tick
         assert abs(res.idle_cycle - last_tick) < IDLE_SLACK_CYCLES, res.idle_cycle - last_tick

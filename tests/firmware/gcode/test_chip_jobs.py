@@ -55,3 +55,27 @@ def test_grbl_words_on_the_chip(firmware, scenario):
     dwell = [t for t in plan.dwell if t]
     assert dwell == [500, 120]  # ticks at 10 kHz (P in whole ms), each a segment on the chip too
     assert plan.ends[-1] == (0, 0)  # G28: back where the motors started, after two G92s
+
+
+# the tool on D11: M3 constant, M4 scaled, off in rapids, M5 at rest, S over $30 clamped
+LASER = ["G21 G90 F3000", "M3 S500", "G0 X1 Y1", "G1 X3", "S1000", "G1 Y3", "M4 S800", "G1 X1 F1500", "G4 P0.01",
+         "G2 X1 Y1 I0 J-1", "M5", "G0 X0 Y0", "M3 S2000", "G1 X1", "M30"]
+
+
+def test_laser_tool_changes_on_the_chip(firmware):
+    plan, seg, res = run_both(firmware["corexy_nonlinear"], LASER)
+    assert plan.replies == ["ok"] * len(LASER)
+    assert {0, 127, 255, 204} <= set(seg.duty.tolist())  # S500, S1000, M4 S800 at full speed
+    assert len(res.tool) >= 7 and res.tool[-1, 1] == 0  # M30 turned it off
+
+
+PEN = ["G21 G90 F3000", "G0 Z5", "G0 X2 Y2", "G1 Z0", "G4 P0.02", "G1 X4", "G0 Z1", "G0 X0", "G1 X-1 Y-1 Z-1",
+       "G91 G0 Z2", "G90 G1 Z0.2", "M5", "G0 Z1", "M2"]
+
+
+def test_servo_pen_changes_on_the_chip(pen_firmware):
+    plan, seg, res = run_both(pen_firmware, PEN)
+    cfg = pen_firmware[1]["machine"]
+    assert plan.replies == ["ok"] * len(PEN)
+    up, down = cfg.pen_duty(False), cfg.pen_duty(True)
+    assert res.tool[:, 1].tolist() == [up, down, up, down, up, down, up]

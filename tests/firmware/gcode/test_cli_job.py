@@ -43,3 +43,31 @@ def test_export_arduino_library_layout(picked_run, tmp_path):
     st = (lib / "examples" / "galvo_cba2012_selftest" / "galvo_cba2012_selftest.ino").read_text()
     assert st.count("    { ") == 64
     assert (lib / "examples" / "galvo_cba2012_gcode" / "galvo_cba2012_gcode.ino").is_file()
+
+
+def test_job_with_a_tool_reports_it_and_checks_its_changes_on_the_chip(picked_run, capsys):
+    """A LightBurn-style laser job through `nnik job` on the simulated Uno: the tool's changes
+    equal the model's, the JSON and the table give tool-on and travel length and on-time."""
+    from tests.firmware.gcode.conftest import require_chip
+
+    require_chip()
+    assert main(["job", str(picked_run), str(JOBS / "lightburn_grbl.gcode")]) == 0
+    res = json.loads((picked_run / "job" / "lightburn_grbl.json").read_text())
+    t, c = res["tool"], res["chip"]
+    # 48 mm of rectangle and 4 x 4.24 mm of diamond with the laser on; the rest is G0 travel
+    assert t["kind"] == "laser" and abs(t["on_mm"] - (40 + 4 * 18 ** 0.5)) < 0.1 and t["travel_mm"] > 10
+    assert c["tool_equal"] and c["tool_changes"] == t["changes"] == 4 and c["steps_equal"]
+    out = capsys.readouterr().out
+    assert "tool on / travel" in out and "4 equal" in out
+
+
+def test_job_names_its_tool_in_a_comment(picked_run, tmp_path, capsys):
+    job = tmp_path / "pen.gcode"
+    job.write_text("; nnik-machine: tool=pen pen_z_um=500\nG0 Z1\nG0 X1\nG1 Z0\nG1 X2\nG0 Z1\n")
+    assert main(["job", str(picked_run), str(job), "--no-chip"]) == 0
+    res = json.loads((picked_run / "job" / "pen.json").read_text())
+    assert res["machine"]["tool"] == "pen" and res["tool"]["on_mm"] == 1.0 and res["tool"]["travel_mm"] == 1.0
+    bad = tmp_path / "bad.gcode"
+    bad.write_text("; nnik-machine: tool=plasma\nG0 X1\n")
+    assert main(["job", str(picked_run), str(bad), "--no-chip"]) == 2
+    assert capsys.readouterr().err.strip() == f"nnik: error: {bad}: tool must be one of laser, pen, servo"

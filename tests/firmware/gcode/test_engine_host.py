@@ -49,14 +49,15 @@ def random_lines(n: int, seed: int) -> list[str]:
     return out
 
 
-def compare(outdir, lib, info, lines):
-    host = run_engine_host(lib, info["name"], lines)
-    cfg = info["machine"]
+def compare(outdir, lib, info, lines, cfg=None):
+    cfg = cfg or info["machine"]
+    host = run_engine_host(lib, info["name"], lines, defines=cfg.defines())
     plan = interpret(lines, cfg)
     seg = plan_steps(plan, cfg, ik_oracle(outdir))
     assert host["replies"] == plan.replies
     assert np.array_equal(host["start"], seg.steps[0])
-    want = np.column_stack([seg.delta, seg.ticks, seg.ends_um]) if len(seg.ticks) else np.zeros((0, 5), np.int64)
+    want = (np.column_stack([seg.delta, seg.ticks, seg.ends_um, seg.duty]) if len(seg.ticks)
+            else np.zeros((0, 6), np.int64))
     assert np.array_equal(host["segments"], want)
     return plan
 
@@ -136,3 +137,47 @@ def test_grbl_words_equal_on_the_host(corexy_lib):
                                    "error: line 22: M1 pause not supported"]
     assert plan.replies[26] == "error: line 27: bad checksum"
     assert sum(d > 0 for d in plan.dwell) > 15 and sum(r != "ok" for r in plan.replies) > 30
+
+
+def tool_lines(n: int, seed: int, pen: bool) -> list[str]:
+    """Moves, arcs, rapids, dwells and the tool's words: M3/M4/M5 with S (above $30 too) on
+    lasers, Z up/down (absolute, relative, inch) on pens; some bad tool lines."""
+    rng = np.random.default_rng(seed)
+    out = ["G21 G90 F2400"]
+    for _ in range(n):
+        x, y = rng.uniform(-10, 10, 2)
+        k = rng.integers(0, 9)
+        if k <= 2:
+            out.append(f"G{rng.integers(0, 2)} X{x:.3f} Y{y:.3f}" + (f" F{rng.uniform(200, 9000):.0f}" if k == 2 else ""))
+        elif k == 3:
+            out.append(f"G{rng.integers(2, 4)} X{x:.3f} Y{y:.3f} R{rng.uniform(-15, 15):.3f}")
+        elif k == 4:
+            out.append(rng.choice([f"G4 P{rng.uniform(0, 0.05):.3f}", "M2", "G28", "M30", "G91", "G90"]))
+        elif k in (5, 6) and pen:
+            out.append(rng.choice([f"G0 Z{rng.uniform(-2, 5):.2f}", "G1 Z-1", "G0 Z5", f"G1 X{x:.2f} Z{rng.uniform(-1, 1):.2f}",
+                                   "G20 G1 Z0.1", "G21", "G91 G0 Z1", "G90 Z-0.5", "M3 S500", "M5", "G4 Z1 P1"]))
+        elif k in (5, 6):
+            out.append(rng.choice([f"M3 S{rng.uniform(0, 1200):.1f}", f"M4 S{rng.integers(0, 1000)}", "M5", "S300", "M4",
+                                   f"G1 X{x:.3f} M3 S{rng.integers(0, 1000)}", "M3 M5", "S-1", "G1 Z1", "M3"]))
+        else:
+            out.append(f"G91 G1 X{rng.uniform(-0.8, 0.8):.3f} Y{rng.uniform(-0.8, 0.8):.3f}")
+            out.append("G90")
+    return out
+
+
+@pytest.mark.parametrize("tool", ["laser", "pen", "servo"])
+def test_tool_output_equal_on_the_host(corexy_lib, tool):
+    """Every segment's duty on D11, from the engine's C with the tool's macros, equals the model's."""
+    from dataclasses import replace
+
+    outdir, lib, info = corexy_lib
+    cfg = replace(info["machine"], tool=tool, pen_z_um=250)
+    plan = compare(outdir, lib, info, tool_lines(250, seed=4, pen=tool != "laser"), cfg)
+    seg = plan_steps(plan, cfg, ik_oracle(outdir))
+    duties = set(seg.duty.tolist())
+    if tool == "laser":
+        assert len(duties) > 20  # M3 powers, M4 scaled below them, off
+        assert "error: line" in " ".join(plan.replies) and any("negative S" in r for r in plan.replies)
+    else:
+        assert duties == {cfg.pen_duty(True), cfg.pen_duty(False)}
+    assert sum(plan.dwell) > 0 and sum(1 for d in plan.dwell if d == 1) > 3  # tool changes at rest

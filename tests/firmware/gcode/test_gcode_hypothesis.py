@@ -2,7 +2,10 @@
 model, on both machine kinds. hypothesis draws the jobs (and shrinks a failing one): lines and
 rapids, I/J arcs ending in every quadrant and full circles, R arcs short and long (semicircles
 at the end tolerance too), both directions, G90/G91, G20/G21, comments, a few bad lines, and
-endings with and without M400/M2/M30.
+endings with and without M400/M2/M30; and every grbl word mixed in: N numbers with and without
+Marlin checksums, '%', the accepted modal words, G92, G28 (with and without axes), G4 P, and the
+tool: M3/M4/M5 with S on the laser build, Z up and down on a servo pen build, every tool change
+on the same segment and tick on the chip.
 
 CI runs NNIK_HYPOTHESIS_EXAMPLES (default 10) jobs per machine; `make bench` runs more. Jobs stay
 short in simulated time: at most 5 moves of a few mm at 2-9 m/min."""
@@ -16,13 +19,24 @@ import pytest
 from hypothesis import HealthCheck, event, given, note, settings
 from hypothesis import strategies as st
 
-from nnik.firmware.config import MachineConfig
+from dataclasses import replace
+
+from nnik.firmware.config import MachineConfig, default_machine
 from nnik.firmware.gcode.motion import Interpreter
 from tests.firmware.gcode.conftest import run_both
 
 EXAMPLES = int(os.environ.get("NNIK_HYPOTHESIS_EXAMPLES", "10"))
 UM_PER = {False: 1000, True: 25400}  # um per program unit: mm, inch
-BAD_LINES = ["G2 X30 R1", "G3 R2", "G1 X1 R1", "G2 X1 I1 R1", "G2 X1 Y1", "G1 Z1", "G2 X0 Y0 I0 J0"]
+BAD_LINES = ["G2 X30 R1", "G3 R2", "G1 X1 R1", "G2 X1 I1 R1", "G2 X1 Y1", "G1 Z1", "G2 X0 Y0 I0 J0", "G18", "M0",
+             "G92", "G4", "S-1", "M3 M5", "N1 G1 X1*0", "G28.1", "G92 G1 X1"]
+MODAL = ["G17", "G40", "G49", "G54", "G64", "G80", "G94"]
+
+
+def with_checksum(line: str) -> str:
+    x = 0
+    for c in line.encode("latin-1"):
+        x ^= c
+    return f"{line}*{x}"
 
 
 def num(um: float, inch: bool) -> str:
@@ -40,18 +54,38 @@ def comment(draw, text: str) -> str:
 
 
 @st.composite
-def jobs(draw) -> list[str]:
+def jobs(draw, pen: bool = False) -> list[str]:
     """Lines of a job; an Interpreter follows them so every move starts where the last ended."""
-    it = Interpreter(MachineConfig(origin_um=(0, 0)))
+    it = Interpreter(MachineConfig(origin_um=(0, 0), tool="servo" if pen else "laser", pen_z_um=250))
     lines: list[str] = []
 
     def add(text: str) -> None:
+        n = draw(st.sampled_from(["", "", "n", "sum"]))
+        if n:
+            text = f"N{draw(st.integers(0, 99999999))} {text}"
+            text = with_checksum(text) if n == "sum" else text
         lines.append(text)
         it.line(text)
+
+    def tool_word() -> str:
+        if pen:
+            return draw(st.sampled_from([f"Z{draw(st.integers(-10, 30)) / 10:.1f}", "", "M3 S100", "M5"]))
+        return draw(st.sampled_from(["", f"S{draw(st.integers(0, 1200))}", "M3", "M4", "M5",
+                                     f"M3 S{draw(st.integers(0, 1000))}", f"M4 S{draw(st.integers(0, 1000))}"]))
+
+    def grbl_word() -> None:
+        x, y = (f"{draw(st.integers(-5000, 5000)) / 1000:.3f}" for _ in range(2))
+        add(draw(st.sampled_from([f"G92 X{x} Y{y}", f"G92 X{x}", "G28", f"G28 X{x}", f"G91 G28 Y{y}", "G90",
+                                  f"G4 P{draw(st.integers(0, 40)) / 1000:.3f}", " ".join(draw(st.lists(
+                                      st.sampled_from(MODAL), min_size=1, max_size=3, unique=True))), "%",
+                                  tool_word() or "M5", "M2"])))
 
     add(f"G21 G90 F{draw(st.integers(2000, 9000))}")
     for _ in range(draw(st.integers(1, 5))):
         inch, rel, (x0, y0) = it.inch, it.relative, it.pos
+        if draw(st.integers(0, 2)) == 0:
+            grbl_word()
+            inch, rel, (x0, y0) = it.inch, it.relative, it.pos
         kind = draw(st.sampled_from(["line", "line", "rapid", "ij", "ij", "circle", "r", "r", "modes", "bad"]))
         modes = ""
         if kind == "modes" or draw(st.integers(0, 4)) == 0:
@@ -89,7 +123,8 @@ def jobs(draw) -> list[str]:
         else:
             text = draw(st.sampled_from(BAD_LINES))
         event(f"{kind}{' G20' if inch else ''}{' G91' if rel else ''}")
-        add(comment(draw, modes + text))
+        tw = tool_word() if kind != "bad" else ""
+        add(comment(draw, modes + text + (" " + tw if tw else "")))
     ending = draw(st.sampled_from(["", "M400", "M2", "M30"]))
     event(f"ending {ending or 'none'}")
     if ending:
@@ -103,3 +138,13 @@ def jobs(draw) -> list[str]:
 def test_random_jobs_step_the_same_on_the_chip(firmware, scenario, lines):
     note("\n".join(lines))
     run_both(firmware[scenario], lines)
+
+
+@settings(max_examples=EXAMPLES, deadline=None, database=None, suppress_health_check=[HealthCheck.too_slow])
+@given(lines=jobs(pen=True))
+def test_random_pen_jobs_step_the_same_on_the_chip(corexy_run, tool_firmware, lines):
+    from nnik.firmware.ik_oracle import load_scenario_of
+
+    note("\n".join(lines))
+    cfg = replace(default_machine(load_scenario_of(corexy_run)), tool="servo", pen_z_um=250)
+    run_both(tool_firmware(cfg), lines)

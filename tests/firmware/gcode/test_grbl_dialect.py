@@ -56,3 +56,28 @@ def test_m2_m30_end_the_program_as_grbl():
     assert plan.replies == ["ok"] * 6  # after M30: G1 and G90 (X2 is absolute, not a rapid)
     assert [(m.kind, m.rapid, m.end) for m in plan.moves] == [
         ("line", True, (1000, 0)), ("line", False, (2000, 0)), ("arc", False, (2000, 0)), ("line", False, (2000, 1000))]
+
+
+def test_m4_scales_power_with_the_segments_speed_m3_does_not():
+    """1 um per step: at 9 m/min a 0.5 mm segment needs 34 ticks by its feed but 500 by its steps
+    (one step per tick), so it runs at 34/500 of the feed and M4's power drops to match."""
+    ik = lambda p: (np.asarray(p), np.zeros(len(p), np.int64))  # noqa: E731
+    cfg = MachineConfig(origin_um=(0, 0))
+    lines = ["G1 X0.5 F9000 M3 S1000", "G1 X1 M4", "G1 X1.5 F60", "G0 X2", "M4 S500", "G1 X2.5 F60", "S2000",
+             "G1 X3", "M5", "G1 X3.5", "M3", "G1 X4", "S0"]
+    plan = interpret(lines, cfg)
+    seg = plan_steps(plan, cfg, ik)
+    assert seg.ticks[:4].tolist() == [500, 500, 5000, 500]  # the last: a rapid, 500 steps
+    # S2000 alone waits for the next cut (clamped to $30); M5 and S0 after a cut: off on the next tick
+    assert seg.duty.tolist() == [255, 255 * 34 // 500, 255, 0, 127, 255, 0, 0, 255, 0]
+    assert plan.dwell == [0, 0, 0, 0, 0, 0, 1, 0, 0, 1]
+
+
+def test_tool_words_at_rest_and_the_pen():
+    cfg = MachineConfig(origin_um=(0, 0), tool="servo", pen_z_um=500, servo_up_deg=180, servo_down_deg=0)
+    assert (cfg.pen_duty(False), cfg.pen_duty(True)) == (2400 // 64, 544 // 64)
+    plan = interpret(["G0 Z1", "G1 X1 Z0.5 F600", "G91 Z0.1", "G90 G4 P0.01", "G1 Y1 Z2", "M3 S9", "G1 Z3"], cfg)
+    assert plan.replies == ["ok"] * 7
+    assert plan.tool == [37] + [8, 8] + [37] + [37] + [37, 37]  # rest (up), X1 down, Z0.6 up, dwell, Y1 up
+    laser = interpret(["G1 Z1"], MachineConfig(origin_um=(0, 0)))
+    assert laser.replies == ["error: line 1: unsupported word Z"]
