@@ -37,6 +37,7 @@ bench: setup toolchains
 	$(PYTHON) -m nnik.estimate sweep
 	$(PYTHON) -m nnik.estimate sweep --kernel fast --tanh '' --arch 4 --arch 6 --arch 8 --arch 10 --arch 12 --arch 16
 	NNIK_HYPOTHESIS_EXAMPLES=300 $(PYTHON) -m pytest -q tests/firmware/gcode/test_gcode_hypothesis.py
+	NNIK_HYPOTHESIS_MACHINES=30 $(PYTHON) -m pytest -q tests/implementations/test_random_machines.py
 
 clean:
 	rm -rf build $(STAMP)

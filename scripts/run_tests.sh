@@ -19,5 +19,5 @@ run() {
 run "$@" || exit $?
 if [ "$#" -eq 0 ] && [ "${NNIK_SECOND_MODEL_PASS:-1}" = 1 ]; then
   echo "run_tests: second pass, models trained from seed + 7 with torch's generic CPU kernels"
-  NNIK_TEST_SEED_OFFSET=7 ATEN_CPU_CAPABILITY=default run tests/gcode tests/test_cli_run.py || exit $?
+  NNIK_TEST_SEED_OFFSET=7 ATEN_CPU_CAPABILITY=default run tests/firmware/gcode tests/test_cli_run.py || exit $?
 fi
