@@ -122,7 +122,8 @@ def test_fastc_does_not_import_export():
 LAYERS = (
     ("errors", "progress", "emit", "files"),  # errors; progress bars (on a terminal only); jinja environment,
     # C text helpers, the AVR asm statement; outdir, atomic writes, hashes, pick state
-    ("machine",),  # scenario, params, actuator, domain, data, synth, kinematics, reference
+    ("machine", "dynamics"),  # scenario, params, actuator, domain, data, synth, kinematics, reference,
+    # [motion]/[dynamics]; the axes' spring-damper model, input shapers, precompensation
     ("targets",),  # toolchains, simulators, sizes, the host build, the float IK (speed reference)
     # what the families are made of: the shared contract (base, problem, verify, accuracy,
     # c_common, avr_asm) and each family's fit, integer model, C, fast paths and cost

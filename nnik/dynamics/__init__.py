@@ -1,0 +1,6 @@
+"""Axis dynamics and vibration compensation: the belt as a base-excited spring-damper per axis
+(seed 003), input shapers designed from (f, zeta), and offline precompensation.
+
+Python decides here; the firmware's fixed-point shaper (codegen/arduino/src/nnik_shaper.c and its
+model nnik.firmware.gcode.shaper) takes the constants that quantize() gives.
+"""
