@@ -1,0 +1,89 @@
+"""Seed 003's problem, solved by model inversion: the base trajectory that makes the modelled tip
+follow a reference, so a job can be rewritten offline (`nnik job --precompensate`).
+
+Why inversion and not the seed's iterative optimisation: the base-excited model is linear and
+minimum phase, so its inverse is exact and closed-form,
+    base = r + LPF_tau[r'' / wn^2],  tau = 2 zeta / wn
+(from wn^2 (b - x) + 2 zeta wn (b' - x') = x''), computed in one pass in milliseconds, where the
+seed's fmincon took up to 93 s.  A trapezoid has steps in acceleration, which the inverse turns
+into steps of a / wn^2 in the command (Klipper's reviewers rejected that), so the reference is
+first made snap-limited: the planned motion through two moving averages of smooth_s each (each
+one raises the order of continuity by one: a trapezoid's jerk and snap become finite).  The
+averages round corners a little; that is part of the contour error reported for the method.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from scipy.signal import lfilter
+
+from nnik.dynamics.axis import wn
+
+
+def smooth(p: np.ndarray, fs: float, smooth_s: float) -> np.ndarray:
+    """p (N, 2) sampled at fs, at rest before and after, through two centred moving averages of
+    about smooth_s each.  The result has w + 1 more samples of rest at each end (w = smooth_s fs),
+    so it starts and ends at rest exactly where p does: sample k of p is sample k + w + 1 here."""
+    w = max(1, int(round(smooth_s * fs)))
+    q = np.concatenate([np.repeat(p[:1], 2 * w, 0), p, np.repeat(p[-1:], 2 * w, 0)]).astype(float)
+    k = np.ones(w) / w
+    for _ in range(2):  # "valid": each pass only averages samples that exist (w - 1 fewer)
+        q = np.stack([np.convolve(q[:, i], k, mode="valid") for i in range(q.shape[1])], 1)
+    return q
+    k = np.ones(w) / w
+    for _ in range(2):
+        q = np.stack([np.convolve(q[:, i], k, mode="same") for i in range(q.shape[1])], 1)
+    q[:pad - w + 1] = p[0]  # the convolutions' own zero padding reaches only these
+    q[len(q) - (pad - w + 1):] = p[-1]
+    return q
+
+
+def invert(r: np.ndarray, fs: float, f_hz: tuple[float, float], zeta: tuple[float, float]) -> np.ndarray:
+    """The base that makes the tip follow r (N, 2), sampled at fs, axis by axis."""
+    dt = 1.0 / fs
+    out = np.array(r, dtype=float)
+    for i in range(r.shape[1]):
+        x = np.asarray(r[:, i], float)
+        acc = np.zeros_like(x)
+        acc[1:-1] = (x[2:] - 2 * x[1:-1] + x[:-2]) / dt**2
+        w = wn(f_hz[i])
+        u = acc / w**2
+        tau = 2.0 * zeta[i] / w
+        if tau > 0:  # first-order low-pass, exact for a held input: y[k] = a y[k-1] + (1 - a) u[k]
+            a = math.exp(-dt / tau)
+            u = lfilter([1 - a], [1, -a], u)
+        out[:, i] = x + u
+    return out
+
+
+def precompensated(planned: np.ndarray, fs: float, f_hz, zeta, smooth_s: float) -> tuple[np.ndarray, np.ndarray]:
+    """(reference, base): the planned samples (N, 2) smoothed (smooth() adds rest at both ends),
+    and the base that makes the modelled tip follow that reference, with rest appended for the
+    low-pass to settle (five of its time constants)."""
+    tau = max(2.0 * z / wn(f) for f, z in zip(f_hz, zeta))
+    tail = int(math.ceil(5 * tau * fs)) + 1
+    ref = smooth(planned, fs, smooth_s)
+    ref = np.concatenate([ref, np.repeat(ref[-1:], tail, 0)])
+    return ref, invert(ref, fs, f_hz, zeta)
+
+
+def gcode(base_mm: np.ndarray, fs: float, every: int, origin_mm: np.ndarray, header: list[str]) -> list[str]:
+    """G1 lines through every every-th base sample (program mm, 4 decimals: 0.1 um), each with
+    the feed that takes it there in every / fs seconds; repeated points are dropped."""
+    pts = base_mm[::every]
+    if len(base_mm) and (len(base_mm) - 1) % every:
+        pts = np.concatenate([pts, base_mm[-1:]])
+    prog = pts - origin_mm
+    lines = list(header) + ["G21", "G90", f"G0 X{prog[0, 0]:.4f} Y{prog[0, 1]:.4f}"]
+    dt_min = every / fs / 60.0
+    last = prog[0]
+    for p in prog[1:]:
+        d = float(np.hypot(*(p - last)))
+        if d < 1e-4:
+            continue
+        lines.append(f"G1 X{p[0]:.4f} Y{p[1]:.4f} F{max(d / dt_min, 1.0):.1f}")
+        last = p
+    lines.append("M400")
+    return lines
