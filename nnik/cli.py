@@ -37,43 +37,67 @@ def cmd_run(args) -> None:
     scn = load_scenario(args.scenario)
     out = _outdir(args, scn, create=True)
     console.print(f"[bold]nnik run[/bold] {scn.source} -> {out}/")
-    ds = pipeline.generate(scn, out)
-    console.print(f"generated {', '.join(f'{len(v)} {k}' for k, v in ds.p.items())} points ({ds.meta['sampling']})")
-    _warn_training(pipeline.train(scn, out, normalize=False if args.no_normalize else None))
-    m = pipeline.evaluate(out)
-    if args.no_normalize:
-        print_accuracy(m)
+    if args.no_normalize:  # the MLP alone on raw mm inputs (seed 004's Table 1 'without'): no families, no pick
+        _print_generated(pipeline.generate(scn, out))
+        _warn_training(pipeline.train(scn, out, normalize=False))
+        print_accuracy(pipeline.evaluate(out))
     else:
-        console.print(f"mlp family: exporting its C to {out / pipeline.MLP_DIR}/ and verifying it on host, avr and "
-                      "pic18 ...")
-        pipeline.verify(out, "host")
-        for target in ("avr", "pic18"):
-            res = pipeline.verify(out, target)
+        search_trials = getattr(args, "search", None)
+        stages: list[str] = []
+
+        def on_stage(stage, value):
+            stages.append(stage)
+            _print_stage(out, stage, value)
+
+        try:
+            res = pipeline.run(scn, out, progress=sys.stderr.isatty(), on_stage=on_stage, pick=not search_trials)
+        finally:
+            if "mlp" in stages and not search_trials:  # the families were verified: their table, pick or not
+                print_selection(pipeline.load_metrics(out))
+        if search_trials:
+            console.print(f"searching the design space ({search_trials} trials), verifying the front on host, avr "
+                          "and pic18 ...")
+            bests = [(fam, c.config) for fam, c in res["bests"].items()]
+            _search_and_print(out, search_trials, bests=bests)
+    print_report(out)
+    console.print(f"done in {time.perf_counter() - t0:.1f} s; metrics: {out / pipeline.METRICS_FILE}")
+
+
+def _print_generated(ds) -> None:
+    console.print(f"generated {', '.join(f'{len(v)} {k}' for k, v in ds.p.items())} points ({ds.meta['sampling']})")
+
+
+def _print_stage(out: Path, stage: str, value) -> None:
+    """What `nnik run` says as each of pipeline.run's stages ends."""
+    if stage == "data":
+        _print_generated(value.dataset)
+        console.print("fitting every implementation family (the mlp trains as its family's fit) ...")
+    elif stage == "fitted" and value[2] is not None:
+        _warn_training(value[2])  # the mlp family's network, as its fit trained it
+    elif stage == "mlp":
+        if value:
+            console.print(f"mlp family: its network in {out / pipeline.MODEL_FILE}, its C (both kernels) in "
+                          f"{out / pipeline.MLP_DIR}/, verified on {', '.join(value)}:")
+        for target, res in value.items():
+            if target == "host":
+                continue
             if "not_run" in res:
                 console.print(f"mlp family on {target}: not run ({res['not_run']})")
             else:
                 console.print(f"mlp family on {target}: {res['cycles']:.0f} cycles/IK, {res['flash_bytes']} B flash, "
                               f"{res['mismatches']} mismatches on {res['points']} vectors")
-        console.print(f"mlp family: its accuracy table is `nnik evaluate {out}`")
-        if getattr(args, "search", None):
-            console.print(f"searching the design space ({args.search} trials), verifying the front on host, avr "
-                          "and pic18 ...")
-            _search_and_print(out, args.search)
-        else:
-            console.print("fitting every implementation family, verifying each family's best on host, avr and pic18 ...")
-            try:
-                pipeline.select(out, progress=sys.stderr.isatty())
-            finally:
-                print_selection(pipeline.load_metrics(out))
-    print_report(out)
-    console.print(f"done in {time.perf_counter() - t0:.1f} s; metrics: {out / pipeline.METRICS_FILE}")
+        if value:
+            console.print(f"mlp family: its accuracy table is `nnik evaluate {out}`")
+            console.print("verifying each family's best on host, avr and pic18 ...")
 
-def _search_and_print(out: Path, trials: int, args=None) -> None:
+
+def _search_and_print(out: Path, trials: int, args=None, bests=None) -> None:
     from nnik.search import study as search
 
-    kw = {} if args is None else {"url": args.storage, "name": args.study, "jobs": args.jobs,
-                                  "families": args.families.split(",") if args.families else None,
-                                  "worker_only": args.worker, "warm_start": not args.no_warm_start}
+    kw = {"bests": bests}
+    if args is not None:
+        kw.update(url=args.storage, name=args.study, jobs=args.jobs, worker_only=args.worker,
+                  families=args.families.split(",") if args.families else None, warm_start=not args.no_warm_start)
     try:
         res = search.search(out, trials, **kw)
     finally:
@@ -96,6 +120,7 @@ def cmd_search(args) -> None:
     from nnik.search import study as search
 
     src = Path(args.target)
+    bests = None  # each family's ladder best, when this command fits the ladder
     if src.is_dir():
         out = check_model_dir(src, pipeline.C_DIR)
     else:
@@ -107,17 +132,18 @@ def cmd_search(args) -> None:
         if not _trained_for(scn, out):
             if args.show:
                 raise NnikError("no trained model for this scenario here (run `nnik search` or `nnik run` first)", str(out))
-            console.print(f"[bold]nnik search[/bold] {scn.source} -> {out}/: generating and training first")
-            pipeline.generate(scn, out)
-            _warn_training(pipeline.train(scn, out))
-            pipeline.evaluate(out)
+            console.print(f"[bold]nnik search[/bold] {scn.source} -> {out}/: the data and every family's ladder "
+                          "first (the mlp trains as its family's fit)")
+            res = pipeline.run(scn, out, progress=sys.stderr.isatty(), pick=False, mlp_verify=())
+            _warn_training(pipeline.load_pair(out)[0])
+            bests = [(fam, c.config) for fam, c in res["bests"].items()]
     if not (out / pipeline.MODEL_FILE).is_file():
         raise NnikError("no trained model (run `nnik run` first)", str(out))
     if args.show:
         res = search.show(out, args.storage, args.study)
         print_front(res, pipeline.load_pair(out)[0].scenario.unit)
         return
-    _search_and_print(out, args.trials, args)
+    _search_and_print(out, args.trials, args, bests)
     if not args.worker:
         print_report(out)
 

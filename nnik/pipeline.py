@@ -1,26 +1,35 @@
-"""The steps `nnik run` chains: generate -> train (+ONNX) -> evaluate. Each reads/writes OUTDIR."""
+"""One pipeline for every implementation family, in stages that read and write OUTDIR.
+
+``nnik run`` is :func:`run`: scenario -> data (:func:`prepare`: the samples, or a measured
+machine's marks and the reference model fitted to them) -> every family fitted over its ladder
+through the same interface (:func:`fit_bests`; the MLP's training is its family's fit) -> the MLP
+family's own files (model.pt, model.onnx, c/mlp/, :func:`keep_mlp`) -> each family's best verified
+on the host and the simulated chips (:func:`verify_bests`) -> the pick, c/NAME.c and c/alt/,
+metrics.json's selection and pick.json (:func:`conclude`). ``nnik select`` runs the same stages on
+a finished OUTDIR; ``nnik search`` (nnik.search.study) fits its own candidates and then shares
+:func:`verify_bests` and :func:`conclude`, and its warm start takes the family bests a finished
+ladder recorded (:func:`stored_bests`) instead of fitting the ladder again.
+
+The MLP's own steps (``nnik train``, ``evaluate``, ``export``, ``verify --mlp-pipeline``) live in
+nnik.implementations.mlp.outputs and are re-exported here for the commands that run them alone.
+"""
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
-import numpy as np
-from sklearn.linear_model import LinearRegression
-
+from nnik import selection as sel
+from nnik.errors import NnikError
 from nnik.files import pick_state
 from nnik.files.c_hash import dir_hash
+from nnik.files.metrics import (C_DIR, DATA_FILE, FIXED_EVAL_FILE, METRICS_FILE, MLP_DIR, MODEL_FILE,  # noqa: F401
+                                ONNX_FILE, load_metrics, write_metrics)
+from nnik.implementations.mlp.outputs import (TARGET_OPTS, check_data_matches, estimate_row, evaluate,  # noqa: F401
+                                              export, load_pair, mlp_flash_bytes, quantize_kernel, target_vectors,
+                                              train, verify, verify_target)
+from nnik.implementations.mlp.train import TrainedModel  # noqa: F401
 from nnik.machine.data import Dataset, build_dataset
-from nnik.errors import NnikError
-from nnik.implementations.mlp.evaluate import error_stats, position_error_um, relative_pct
-from nnik.implementations.mlp.onnx_export import ONNX_TOLERANCE, check_onnx, export_onnx
 from nnik.machine.scenario import Scenario
-from nnik.implementations.mlp.train import MAX_FIT_ROWS, TrainedModel, train_model
-
-DATA_FILE = "data.npz"
-MODEL_FILE = "model.pt"
-ONNX_FILE = "model.onnx"
-METRICS_FILE = "metrics.json"
 
 
 def default_outdir(scn: Scenario, normalize: bool = True) -> Path:
@@ -35,351 +44,53 @@ def generate(scn: Scenario, outdir: Path) -> Dataset:
     return ds
 
 
-def check_data_matches(scn: Scenario, ds: Dataset, outdir: Path, what: str = "the scenario") -> None:
-    """data.npz must come from this very scenario (name and fingerprint)."""
-    got = ds.meta.get("scenario_hash")
-    if got != scn.fingerprint:
-        was = ds.meta.get("scenario", "?")
-        raise NnikError(f"data.npz was generated from {'scenario ' + repr(was) if was != scn.name else 'another version of it'}"
-                        f", not from {what} {scn.name!r} ({scn.source}); run `nnik generate` (or `nnik run`) again",
-                        str(outdir / DATA_FILE))
+# ---- the stages ---------------------------------------------------------------------------------
+def run(scn: Scenario, outdir: Path, progress: bool = True, on_stage=None, pick: bool = True,
+        mlp_verify=("host", "avr", "pic18")) -> dict:
+    """`nnik run`: every stage, every family alike (see the module docstring). ``on_stage(name,
+    value)`` hears of each finished stage ("data": the Problem; "fitted": (candidates, family
+    bests, the MLP family's trained network); "mlp": the MLP's own C verified on each of
+    ``mlp_verify``). With ``pick`` false the run stops before the family bests are verified
+    (`nnik run --search` and `nnik search SCENARIO` hand them to the search's warm start).
+    Returns the selection section, or {"problem", "candidates", "bests"} without ``pick``."""
+    from nnik.implementations.mlp import family as mlp_family
+
+    say = on_stage or (lambda stage, value: None)
+    problem = prepare(scn, outdir, progress)
+    say("data", problem)
+    target, asked = resolve_target(problem)
+    cands, bests = fit_bests(problem, target, progress=progress)
+    say("fitted", (cands, bests, mlp_family.trained(problem)))
+    say("mlp", keep_mlp(problem, outdir, verify_on=mlp_verify))
+    if not pick:
+        return {"problem": problem, "candidates": cands, "bests": bests}
+    verify_bests(outdir, bests, progress)
+    return conclude(outdir, problem, cands, bests, target, asked)
 
 
-def load_pair(outdir: Path) -> tuple[TrainedModel, Dataset]:
-    """model.pt and data.npz of OUTDIR, checked to belong to the same scenario."""
-    model = TrainedModel.load(outdir / MODEL_FILE)
-    ds = Dataset.load(outdir / DATA_FILE)
-    check_data_matches(model.scenario, ds, outdir, "the model's scenario")
-    return model, ds
+def prepare(scn: Scenario, outdir: Path, progress: bool = True):
+    """Stage 1, data: data.npz and the Problem every family is fitted to. A measured machine's
+    reference model is fitted to its marks here, with the scenario's MLP (its family's training,
+    on the marks) among its candidates; the ladder then finds that network already trained."""
+    from nnik.implementations.mlp.family import own_config, train_network
+
+    ds = generate(scn, outdir)
+    model = None if scn.mechanism.analytic else train_network(scn, ds, own_config(scn), progress)
+    return build_problem(scn, ds, model)
 
 
-def train(scn: Scenario, outdir: Path, normalize: bool | None = None, progress: bool = True) -> TrainedModel:
-    ds = Dataset.load(outdir / DATA_FILE)
-    check_data_matches(scn, ds, outdir)
-    pick_state.invalidate(outdir)
-    model = train_model(scn, ds, normalize=normalize, progress=progress)
-    model.save(outdir / MODEL_FILE)
-    export_onnx(model, outdir / ONNX_FILE)
-    return model
-
-
-def affine_baseline(ds: Dataset) -> np.ndarray:
-    """The skeptic's first baseline: a least-squares affine map fitted on the training set."""
-    lr = LinearRegression().fit(ds.p["train"], ds.q["train"])
-    return lr.predict(ds.p["test"])
-
-
-def evaluate(outdir: Path) -> dict:
-    model, ds = load_pair(outdir)
-    scn = model.scenario
-    p, q = ds.p["test"], ds.q["test"]
-    pred = model.predict(p)
-    onnx_diff = check_onnx(model, outdir / ONNX_FILE, p)
-    if not onnx_diff <= ONNX_TOLERANCE:
-        raise NnikError(f"ONNX model differs from torch by {onnx_diff:.3g} (> {ONNX_TOLERANCE:g})", str(outdir / ONNX_FILE))
-    shape = list(model.net.shape)
-    pick_state.invalidate(outdir)  # metrics.json is rewritten without a selection
-    metrics = {
-        "name": scn.name,
-        "scenario": scn.source,
-        "mechanism": scn.mechanism.describe(),
-        "actuator": scn.actuator.describe(),
-        "outputs": scn.outputs,
-        "unit": scn.unit,
-        "network": {
-            "shape": shape,
-            "mode": scn.network["mode"],
-            "normalize": model.normalize,
-            "parameters": int(sum(a * b + b for a, b in zip(shape[:-1], shape[1:]))),
-        },
-        "dataset": {**{f"n_{s}": int(len(ds.p[s])) for s in ds.p}, "truth": ds.meta["truth"]},
-        "float": {**error_stats(pred, q), "rel_pct": relative_pct(pred, q)},
-        "affine_only": error_stats(affine_baseline(ds), q),
-        "onnx": {"max_abs_diff": onnx_diff, "tolerance": ONNX_TOLERANCE, "ok": True},
-        "train_seconds": model.train_seconds,
-        "training": {"stopped_by": model.stopped_by, "seconds": model.train_seconds,
-                     "max_seconds": scn.training["max_seconds"],
-                     "restarts_run": len({h["restart"] for h in model.history}),
-                     "lbfgs_rounds_run": sum(h["phase"] == "lbfgs" for h in model.history),
-                     "rows_fitted": min(int(len(ds.p["train"])), MAX_FIT_ROWS)},
-    }
-    pos = position_error_um(scn, pred, p)
-    if pos is not None:
-        metrics["float"]["position_um"] = pos
-    write_metrics(outdir, metrics, merge=False)
-    return metrics
-
-
-def load_metrics(outdir: Path) -> dict:
-    path = outdir / METRICS_FILE
-    if not path.is_file():
-        raise NnikError("no metrics.json (run `nnik evaluate` first)", str(outdir))
-    return _read_metrics(path)
-
-
-def _read_metrics(path: Path) -> dict:
-    try:
-        m = json.loads(path.read_text(encoding="utf-8"))
-    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise NnikError(f"corrupt metrics file ({type(exc).__name__}); run `nnik evaluate` again", str(path)) from None
-    if not isinstance(m, dict):
-        raise NnikError(f"corrupt metrics file (a JSON {type(m).__name__}, not an object); run `nnik evaluate` again",
-                        str(path))
-    return m
-
-
-def write_metrics(outdir: Path, metrics: dict, merge: bool = True) -> None:
-    """Write OUTDIR/metrics.json; later steps merge their own sections into it."""
-    from nnik.files.atomic_write import write_file_atomic
-
-    path = outdir / METRICS_FILE
-    old = _read_metrics(path) if merge and path.is_file() else {}
-    old.update(metrics)
-    write_file_atomic(path, json.dumps(old, indent=2) + "\n")  # a kill leaves the old file or the new one
-
-
-# ---- fixed point: quantise, generate C, verify on the host -----------------------------------
-C_DIR = "c"  # the pick (NAME.c), the float IK (NAME_float.c), alt/<family>/ and mlp/
-MLP_DIR = "c/mlp"  # the scenario's MLP pipeline (its kernel), and the other kernel in MLP_DIR/<kernel>/
-FIXED_EVAL_FILE = "fixed_eval.npz"
-
-
-def _truth_for_um(scn, in_um: np.ndarray, fallback_q: np.ndarray) -> np.ndarray:
-    """The exact IK at the integer-um inputs the C sees (analytic), or the held-out rows."""
-    from nnik.machine.data import exact_targets
-
-    return exact_targets(scn, in_um / 1000.0) if scn.mechanism.analytic else fallback_q
-
-
-def quantize_kernel(model: TrainedModel, ds: Dataset, kernel: str):
-    """The scenario's integer model for one kernel ("fast" or "portable")."""
-    from nnik.implementations.mlp import quantize as fx
-
-    scn = model.scenario
-    tanh = None if scn.export["tanh"] == "default" else scn.export["tanh"]
-    return fx.quantize(model, tanh_variant=tanh, weight_bits=scn.export["weight_bits"],
-                       calib=fx.calibration_set(model, ds.p["train"], ds.q["train"]), kernel=kernel)
-
-
-def other_kernel(kernel: str) -> str:
-    return "portable" if kernel == "fast" else "fast"
-
-
-def export(outdir: Path):
-    """Quantise model.pt, write OUTDIR/c/mlp/NAME.{h,c} (the scenario's kernel) and, for
-    comparison, OUTDIR/c/mlp/<other kernel>/NAME.{h,c}, and the float IK (the speed reference) in OUTDIR/c/;
-    returns both integer models (scenario's kernel first). Nothing is written unless every
-    file was generated and the range analysis held (see nnik.files.atomic_write)."""
-    from nnik.implementations.mlp import quantize as fx
-    from nnik.files.atomic_write import Staged
-    from nnik.implementations.mlp.export import render_model_c
-
-    model, ds = load_pair(outdir)
-    scn = model.scenario
-    staged = Staged(outdir)
-    im = quantize_kernel(model, ds, scn.export["kernel"])
-    staged.add(render_model_c(im, scn.source), MLP_DIR)
-    alt_im = quantize_kernel(model, ds, other_kernel(im.kernel))
-    staged.add(render_model_c(alt_im, scn.source), Path(MLP_DIR) / alt_im.kernel)
-    in_um = np.rint(ds.p["test"] * 1000).astype(np.int64)
-    truth = _truth_for_um(scn, in_um, ds.q["test"])
-    baselines = _export_baselines(scn, staged)
-    total, delivered, _ = im.run(in_um)
-    pre = total / float(2**im.out.F)
-    stats = error_stats(pre, truth)
-    ranges = fx.range_report(im, np.concatenate([fx.dense_inputs_um(im), in_um]))
-    if not all(r["within_bound"] for r in ranges):
-        raise NnikError("range analysis failed: a tensor exceeded its proven bound", str(outdir))
-    tanh_stats = im.tanh_summary()
-    staged.commit()
-    write_metrics(outdir, {
-        "fixed": {**stats, "delivered_max_abs": np.abs(delivered - truth).max(0).tolist(),
-                  "delivered_rms": np.sqrt(((delivered - truth) ** 2).mean(0)).tolist(),
-                  "tanh_variant": im.tanh_variant, "weight_bits": im.weight_bits, "kernel": im.kernel,
-                  "weights_bytes": im.weights_bytes(), "model_hash": im.model_hash(),
-                  "q_formats": im.formats(), "ranges": ranges},
-        "tanh": {"variant": im.tanh_variant, **{k: tanh_stats[k] for k in ("max_lsb", "rms_lsb") if k in tanh_stats}},
-        "baselines": baselines,
-    })
-    np.savez_compressed(outdir / FIXED_EVAL_FILE, p_test=ds.p["test"], q_true=truth, q_float=model.predict(ds.p["test"]),
-                        q_fixed=pre, q_delivered=delivered)
-    return im, alt_im
-
-
-def mlp_flash_bytes(im) -> int:
-    """Bytes of constant tables the MLP needs: weights, biases and the tanh table."""
-    return im.weights_bytes() + im.tanh_bytes()
-
-
-def _export_baselines(scn, staged) -> dict:
-    """Stage c/NAME_float.{h,c}, the float math.h IK, where a closed form exists. (What a firmware
-    engineer would write as a table is a point of the lut family: its best is in the selection.)"""
-    from nnik.targets import float_ik
-
-    out: dict = {}
-    reason = float_ik.float_unavailable_reason(scn)
-    if reason is None:
-        staged.add(float_ik.render_float_c(scn), C_DIR)
-        out["float"] = {"available": True, "file": f"{scn.name}_float.c"}
-    else:
-        out["float"] = {"available": False, "reason": reason}
-    return out
-
-
-def _verify_baselines_host(outdir: Path, bmetrics: dict, ds: Dataset, inputs: dict) -> dict:
-    """Run the float IK's C on the host: its delivered error is measured against the exact IK
-    (libm is not bit-reproducible, so there is no integer model to match)."""
-    from nnik.targets.host import run_host_driver
-
-    model = TrainedModel.load(outdir / MODEL_FILE)
-    scn = model.scenario
-    c_dir = outdir / C_DIR
-    if bmetrics["float"]["available"]:
-        test_um = inputs["test"]
-        c = run_host_driver(c_dir, f"{scn.name}_float", test_um, libs=("-lm",))
-        truth = _truth_for_um(scn, test_um, ds.q["test"])
-        bmetrics["float"].update(error_stats(c["out"], truth))
-    return bmetrics
-
-
-def verify(outdir: Path, target: str = "host"):
-    """Run the generated C on a target and compare it bit for bit with the integer model."""
-    from nnik.implementations.mlp.host import verification_inputs, verify_host
-
-    if target in TARGET_OPTS:
-        return verify_target(outdir, target)
-    if target != "host":
-        raise NnikError(f"unknown target {target!r} (host, avr, pic18)")
-    im, alt_im = export(outdir)  # deterministic: regenerates the same C and integer models
-    ds = Dataset.load(outdir / DATA_FILE)
-    inputs = verification_inputs(im, ds.p["test"])
-    res = verify_host(im, outdir / MLP_DIR, inputs)
-    res["other_kernel"] = {"kernel": alt_im.kernel,
-                           **verify_host(alt_im, outdir / MLP_DIR / alt_im.kernel, {"test": inputs["test"]})}
-    res["bit_exact"] = res["bit_exact"] and res["other_kernel"]["bit_exact"]
-    res["c_hash"] = dir_hash(outdir / MLP_DIR, im.name)
-    metrics = load_metrics(outdir)
-    metrics["host"] = res
-    metrics["baselines"] = _verify_baselines_host(outdir, metrics["baselines"], ds, inputs)
-    write_metrics(outdir, metrics, merge=False)
-    return res
-
-
-
-# ---- simulated targets ------------------------------------------------------------------------
-TARGET_OPTS = {"avr": ("-Os", "-O2"), "pic18": ("",)}
-
-
-def target_vectors(im, p_test_mm: np.ndarray, n_test: int = 200) -> np.ndarray:
-    """A few hundred vectors: test points, the domain's corners and edges, out-of-domain points."""
-    lo, hi = im.inp.lo, im.inp.hi
-    corners = np.array([[lo[0], lo[1]], [lo[0], hi[1]], [hi[0], lo[1]], [hi[0], hi[1]]], dtype=np.int64)
-    mid = (lo + hi) // 2
-    edges = np.array([[mid[0], lo[1]], [mid[0], hi[1]], [lo[0], mid[1]], [hi[0], mid[1]], mid], dtype=np.int64)
-    span = hi - lo
-    outside = np.array([[lo[0] - 1, mid[1]], [hi[0] + 1, mid[1]], [mid[0], lo[1] - span[1]], [mid[0], hi[1] + span[1]],
-                        [lo[0] - span[0], lo[1] - span[1]], [hi[0] + span[0], hi[1] + span[1]],
-                        [-(2**31), 2**31 - 1], [2**31 - 1, -(2**31)]], dtype=np.int64)
-    test = np.rint(p_test_mm[:n_test] * 1000).astype(np.int64)
-    return np.concatenate([test, corners, edges, outside])
-
-
-def _target_row(res: dict, truth_in: np.ndarray | None, out: np.ndarray, inside: np.ndarray) -> dict:
-    row = {"cycles": float(res["cycles_mean"]), "cycles_max": int(res["cycles_max"]),
-           "flash_bytes": int(res["model_flash_bytes"]), "ram_bytes": int(res["model_ram_bytes"]),
-           "program_flash_bytes": int(res["flash_bytes"]), "program_ram_bytes": int(res["ram_bytes"]),
-           "compiler": res["compiler"], "flags": res["compiler_flags"], "us": float(res["us_mean"])}
-    if truth_in is not None:
-        row["max_abs"] = np.abs(out[inside] - truth_in).max(0).tolist()
-    return row
-
-
-def estimate_row(im, target: str, measured: dict | None = None) -> dict:
-    """The static estimator's prediction, and its % difference from a measurement if given."""
-    from nnik.estimate import estimate
-
-    e = estimate(im, target)
-    row = {k: e[k] for k in ("cycles", "flash_bytes", "ram_bytes", "profile", "validated", "cycles_error_pct") if k in e}
-    if measured:
-        row["cycles_error_pct"] = 100 * (e["cycles"] - measured["cycles"]) / measured["cycles"]
-        row["flash_error_pct"] = 100 * (e["flash_bytes"] - measured["flash_bytes"]) / max(measured["flash_bytes"], 1)
-    return row
-
-
-def verify_target(outdir: Path, target: str) -> dict:
-    """Run the MLP (each compiler setting) and the float IK in the same harness."""
-    from nnik.targets import TargetError, available, run_on_target
-
-    ok, reason = available(target)
-    if not ok:
-        res = {"not_run": reason}
-        write_metrics(outdir, {"targets": {**load_metrics(outdir).get("targets", {}), target: res}})
-        return res
-    im, alt_im = export(outdir)
-    ds = Dataset.load(outdir / DATA_FILE)
-    metrics = load_metrics(outdir)
-    scn = TrainedModel.load(outdir / MODEL_FILE).scenario
-    c_dir = outdir / C_DIR
-    vec = target_vectors(im, ds.p["test"])
-    inside = np.all((vec >= im.inp.lo) & (vec <= im.inp.hi), axis=1)
-    n_in = int(inside.sum())
-    truth = _truth_for_um(scn, vec[inside], ds.q["test"][:n_in]) if scn.mechanism.analytic else None
-    _, want, want_flags = im.run(vec)
-
-    def run(prefix, opt, src_dir=c_dir, tag=""):
-        try:
-            return run_on_target(target=target, sources=[src_dir / f"{prefix}.c"], include_dirs=[src_dir], name=prefix,
-                                 vectors=vec, opt=opt or "-Os",
-                                 workdir=(outdir / "targets" / target / (prefix + tag + opt)).resolve())
-        except TargetError as exc:
-            raise NnikError(f"{target}: {exc}") from None
-
-    kernels, mismatches = {}, 0
-    alt = alt_im.kernel
-    _, alt_want, alt_flags = alt_im.run(vec)
-    mlp_dir = outdir / MLP_DIR
-    runs = [(im.kernel, opt, mlp_dir, want, want_flags) for opt in TARGET_OPTS[target]]
-    runs.append((alt, TARGET_OPTS[target][0], mlp_dir / alt, alt_want, alt_flags))
-    for kernel, opt, src_dir, w, wf in runs:
-        r = run(scn.name, opt, src_dir, kernel)
-        bad = np.any(r["outputs"] != w, axis=1) | (r["flags"] != wf)
-        mismatches += int(bad.sum())
-        kernels[f"{kernel} {opt}".strip()] = {**_target_row(r, truth, r["outputs"], inside), "mismatches": int(bad.sum()),
-                                              "bit_exact": not bad.any()}
-    main = kernels[f"{im.kernel} {TARGET_OPTS[target][0]}".strip()]
-    base = {}
-    if metrics["baselines"]["float"]["available"]:
-        r = run(f"{scn.name}_float", TARGET_OPTS[target][0])
-        base["float"] = _target_row(r, truth, r["outputs"], inside)
-    else:
-        base["float"] = {"not_run": metrics["baselines"]["float"]["reason"]}
-    # each MLP kernel's own row says whether it is bit-exact
-    res = {**main, "kernel": im.kernel, "bit_exact": mismatches == 0, "mismatches": mismatches, "points": int(len(vec)),
-           "clock_hz": 16_000_000, "kernels": kernels, "baselines": base}
-    if "cycles" in base["float"]:
-        res["speedup_vs_float"] = base["float"]["cycles"] / main["cycles"]
-    res["estimate"] = estimate_row(im, target, main)
-    res["c_hash"] = dir_hash(outdir / MLP_DIR, im.name)
-    write_metrics(outdir, {"targets": {**metrics.get("targets", {}), target: res}})
-    return res
-
-
-# ---- every implementation family: fit, verify, pick ---------------------------------------------
 def problem_for(outdir: Path):
-    """The implementation contract for OUTDIR's scenario, with its trained MLP cached in it."""
-    from nnik.implementations.mlp.family import remember_trained
-
+    """The Problem of a finished OUTDIR (model.pt and data.npz), its trained MLP in the cache."""
     model, ds = load_pair(outdir)
-    problem = build_problem(model.scenario, ds, model)
-    remember_trained(problem, model)
-    return problem
+    return build_problem(model.scenario, ds, model)
 
 
 def build_problem(scn, ds: Dataset, model=None):
     """The Problem of a scenario: for a measured machine with its reference fitted to the marks
-    (the trained MLP, if given, a candidate scored on its held-out rows), and [target] max_error
-    filled in by with_default_target."""
+    (the trained MLP, if given, a candidate scored on its held-out rows, and kept in the problem's
+    cache as the MLP family's fit), and [target] max_error filled in by with_default_target."""
     from nnik.implementations import Problem
+    from nnik.implementations.mlp.family import remember_trained
 
     reference = None
     if not scn.mechanism.analytic:  # measured: the families compile a reference fitted to the marks
@@ -388,7 +99,10 @@ def build_problem(scn, ds: Dataset, model=None):
         mlp = None if model is None else (model.predict, model.predict(ds.p["test"]) - ds.q["test"])
         reference = reference_for(scn, mlp)
     scn = with_default_target(scn, reference.error_max if reference is not None else 0.0)
-    return Problem(scn, ds, unit_um=scn.export["input_unit_um"], reference=reference)
+    problem = Problem(scn, ds, unit_um=scn.export["input_unit_um"], reference=reference)
+    if model is not None:
+        remember_trained(problem, model)
+    return problem
 
 
 DEFAULT_MAX_ERROR = 0.25  # output units: without [target] max_error, max(this, DEFAULT_FLOOR_FACTOR x error floor)
@@ -410,35 +124,59 @@ def with_default_target(scn, error_floor: float):
     return dataclasses.replace(scn, target={**scn.target, "max_error": value, "max_error_source": how})
 
 
-def select(outdir: Path, progress: bool = True, families=None, target: dict | None = None) -> dict:
-    """Fit every family's ladder, verify each family's best (host, avr, pic18), export the pick as
-    c/NAME.{c,h} and every family's best as c/alt/<family>/; metrics["selection"]. ``target``
-    overrides the scenario's [target] table (keys as there)."""
-    from nnik.progress import bar
-
-    from nnik import selection as sel
-
-    problem = problem_for(outdir)
-    overrides = target
-    target = {**problem.scn.target, **(target or {})}
+def resolve_target(problem, overrides: dict | None = None) -> tuple[dict, bool]:
+    """The [target] the pick is made for (the scenario's, ``overrides`` from the command line on
+    top) and whether max_error was asked for (else it is the default, which a pick may miss)."""
+    target = {**problem.scn.target, **(overrides or {})}
     if target.get("max_error") != problem.scn.target.get("max_error"):
         target["max_error_source"] = "command line"
-    pick_state.invalidate(outdir)  # c/NAME.c and c/alt/ are about to change
+    asked = "max_error" in (problem.scn.raw.get("target") or {}) or "max_error" in (overrides or {})
+    return target, asked
+
+
+def fit_bests(problem, target: dict, families=None, progress: bool = False):
+    """Stage 2: every family's ladder fitted through the same interface (the MLP trains here,
+    unless its network is already in the problem's cache) and measured on the check set;
+    returns (every candidate, each family's best for ``target``)."""
+    from nnik.progress import bar
+
     cands = sel.fit_ladder(problem, families, progress=(lambda **k: bar(leave=False, **k)) if progress else None,
                            max_error=target["max_error"])
-    bests = sel.family_bests(cands, target)
-    # every family's best is verified and written to c/alt/, whether or not one meets the target
-    c_dir = outdir / C_DIR
-    for c in bar(list(bests.values()), desc="verify family bests", unit="family", disable=not progress, leave=False):
-        sel.verify_candidate(c, c_dir / sel.ALT_DIR / c.family, (outdir / "targets" / "families").resolve())
+    return cands, sel.family_bests(cands, target)
+
+
+def keep_mlp(problem, outdir: Path, verify_on=("host", "avr", "pic18")) -> dict:
+    """The MLP family's own files (nnik.implementations.mlp.outputs.keep): model.pt, model.onnx,
+    its accuracy; then c/mlp/ and the float IK verified on ``verify_on``. Returns target ->
+    verification result."""
+    from nnik.implementations.mlp import outputs
+
+    outputs.keep(problem, outdir)
+    return {t: verify(outdir, t) for t in verify_on}
+
+
+def verify_bests(outdir: Path, bests: dict, progress: bool = False, only_meeting: float | None = None) -> None:
+    """Stage 3: each family's best (or, with ``only_meeting``, those that meet that max_error)
+    verified on the host and both simulated chips, from its C in c/alt/<family>/."""
+    from nnik.progress import bar
+
+    todo = [c for c in bests.values() if only_meeting is None or c.meets(only_meeting)]
+    for c in bar(todo, desc="verify family bests", unit="family", disable=not progress, leave=False):
+        sel.verify_candidate(c, outdir / C_DIR / sel.ALT_DIR / c.family, (outdir / "targets" / "families").resolve())
+
+
+def conclude(outdir: Path, problem, cands: list, bests: dict, target: dict, asked: bool = True,
+             source: str = "ladder", extra=None) -> dict:
+    """Stage 4: pick among the verified family bests, write c/NAME.{c,h} and c/alt/ (only
+    verified C), metrics.json's selection (plus ``extra(pick)``'s sections) and, last, pick.json.
+    Raises the reason when nothing can be picked (every family's best is then in c/alt/)."""
     pick = sel.choose(bests, target)
-    asked = "max_error" in (problem.scn.raw.get("target") or {}) or "max_error" in (overrides or {})
     if pick is None and not asked and bests:
         # no [target] max_error: the default is a goal, not a reason to fail; the most accurate
         # verified family best within the limits is flashed, and the summary says it missed
         pick = sel.choose_most_accurate(bests, target)
-    if bests:
-        sel.write_choice(c_dir, bests, pick)
+    if bests and (pick is not None or any("bit_exact" in c.checks.get("host", {}) for c in bests.values())):
+        sel.write_choice(outdir / C_DIR, bests, pick)
     section = {
         "target": target, "input_unit_um": problem.unit_um, "check_points": int(len(problem.check[0])),
         "check_set": ("grid + edge + random check inside the marks' hull, against the reference" if problem.reference
@@ -450,11 +188,55 @@ def select(outdir: Path, progress: bool = True, families=None, target: dict | No
         "ladder": [c.row() for c in cands],
         "pick": None if pick is None else {"family": pick.family, "config": pick.config, "describe": pick.impl.describe(),
                                            "model_hash": pick.impl.source_hash(), "file": f"{problem.name}.c"},
+        "inputs": pick_state.inputs_hash(outdir),  # the data key stored_bests reuses this selection by
     }
-    # the families' table also sits at the top level, where issue 8 asked for it
-    extra = {"reference": problem.reference.to_dict()} if problem.reference is not None else {}
-    write_metrics(outdir, {"selection": section, "implementations": section["implementations"], **extra})
+    if source != "ladder":
+        section["source"] = source
+    more = {"implementations": section["implementations"]}  # where issue 8 asked for the families' table
+    if problem.reference is not None:
+        more["reference"] = problem.reference.to_dict()
+    write_metrics(outdir, {"selection": section, **more, **(extra(pick) if extra else {})})
     if pick is None:
         raise NnikError(sel.no_pick_reason(cands, bests, target, problem), problem.scn.source, "[target]")
     pick_state.seal(outdir, section)  # last: the pick, its metrics and hashes are all in place
     return section
+
+
+TARGET_KEYS = ("chip", "max_error", "max_cycles", "max_flash_bytes")
+
+
+def stored_bests(outdir: Path, target: dict, families: list[str]) -> list[tuple[str, dict]] | None:
+    """Each family's ladder best as a finished ladder selection in OUTDIR recorded it, or None to
+    fit the ladder again. Its key: the selection was made from these very data.npz and model.pt
+    (their hashes), for the same [target] limits, and each family's C in c/alt/<family>/ is still
+    the C it verified."""
+    try:
+        metrics = load_metrics(outdir)
+    except NnikError:
+        return None
+    sec = metrics.get("selection")
+    if not isinstance(sec, dict) or sec.get("source", "ladder") != "ladder" or not sec.get("inputs"):
+        return None
+    if sec["inputs"] != pick_state.inputs_hash(outdir):
+        return None
+    if any((sec.get("target") or {}).get(k) != target.get(k) for k in TARGET_KEYS):
+        return None
+    rows = {r["family"]: r for r in sec.get("implementations") or [] if "skipped" not in r}
+    name = metrics.get("name")
+    for fam in families:
+        if fam not in rows or dir_hash(outdir / C_DIR / sel.ALT_DIR / fam, name) != rows[fam].get("c_hash"):
+            return None
+    return [(fam, rows[fam]["config"]) for fam in families]
+
+
+def select(outdir: Path, progress: bool = True, families=None, target: dict | None = None) -> dict:
+    """`nnik select`: the pipeline's stages on a finished OUTDIR (its model.pt and data.npz):
+    fit every family's ladder, verify each family's best (host, avr, pic18), export the pick as
+    c/NAME.{c,h} and every family's best as c/alt/<family>/; metrics["selection"]. ``target``
+    overrides the scenario's [target] table (keys as there)."""
+    problem = problem_for(outdir)
+    target, asked = resolve_target(problem, target)
+    pick_state.invalidate(outdir)  # c/NAME.c and c/alt/ are about to change
+    cands, bests = fit_bests(problem, target, families, progress)
+    verify_bests(outdir, bests, progress)  # every family's best, whether or not one meets the target
+    return conclude(outdir, problem, cands, bests, target, asked)

@@ -1,21 +1,65 @@
-"""`nnik run` end to end on a small scenario: every stage runs and leaves its artefacts."""
+"""`nnik run` end to end on a small scenario: every stage runs and leaves its artefacts, and a
+scenario's max_error reaches the pick through few modules."""
 
 from __future__ import annotations
 
+import contextlib
+import io
 import json
+import sys
+
+import pytest
 
 from nnik.cli import main
 from tests.conftest import DATASETS, write_toml
 
+MAX_MODULES = 6  # issue 17: following a scenario's max_error from the CLI to the pick crosses at most this many
 
-def test_run_end_to_end(tmp_path, capsys):
+
+@pytest.fixture(scope="module")
+def traced_run(tmp_path_factory):
+    """`nnik run` on a small galvo, traced: at every call of Candidate.meets (where a candidate's
+    error is compared with max_error) and of the MLP's train_model, the call stack (and the
+    max_error given) is recorded.
+    Returns (outdir, printed output, the recorded calls, the scenario file)."""
+    from nnik.implementations.mlp.train import train_model
+    from nnik.selection import Candidate
+
+    tmp_path = tmp_path_factory.mktemp("run")
     text = (DATASETS / "galvo_cba2012.toml").read_text()
     text = text.replace("n_train = 1000", "n_train = 300").replace("n_test = 20000", "n_test = 2000")
     text = text.replace("max_seconds = 60", "max_seconds = 4\nrestarts = 1\nadam_steps = 500")
     toml = write_toml(tmp_path, text)
     out = tmp_path / "out"
-    assert main(["run", str(toml), "-o", str(out)]) == 0
-    printed = capsys.readouterr().out
+    meets, train, calls = Candidate.meets.__code__, train_model.__code__, []
+
+    def tracer(frame, event, arg):  # called on each Python call; None: no line events anywhere
+        if frame.f_code is meets or frame.f_code is train:
+            stack, f = [], frame
+            while f is not None:
+                stack.append((f.f_globals.get("__name__", ""), f.f_code.co_name))
+                f = f.f_back
+            calls.append({"max_error": frame.f_locals.get("max_error"), "stack": stack[::-1]})
+        return None
+
+    printed = io.StringIO()
+    before = sys.gettrace()
+    sys.settrace(tracer)
+    try:
+        with contextlib.redirect_stdout(printed):
+            rc = main(["run", str(toml), "-o", str(out)])
+    finally:
+        sys.settrace(before)
+    assert rc == 0
+    return out, printed.getvalue(), calls, toml
+
+
+def test_run_end_to_end(traced_run):
+    out, printed, calls, _ = traced_run
+    # one pipeline: the MLP trains once, as its family's fit inside the ladder like every family
+    trainings = [c["stack"] for c in calls if c["stack"][-1][1] == "train_model"]
+    assert len(trainings) == 1
+    assert ("nnik.selection", "fit_ladder") in trainings[0] and ("nnik.implementations.mlp.family", "fit") in trainings[0]
     for f in ("data.npz", "model.pt", "model.onnx", "metrics.json", "c/galvo_cba2012.c", "c/galvo_cba2012.h",
               "c/galvo_cba2012_float.c", "report/index.html", "report/report.md"):
         assert (out / f).is_file(), f
@@ -57,3 +101,22 @@ def test_no_progress_bars_in_a_log(tmp_path):
         assert r.returncode == 0, r.stderr
         assert "\r" not in r.stdout + r.stderr
     assert (out / "model.pt").is_file()
+
+
+def test_max_error_reaches_the_pick_through_at_most_6_modules(traced_run):
+    """Issue 17's goal: where the pick is decided (selection.choose comparing each verified family
+    best's error with max_error), the stack from the CLI down crosses at most MAX_MODULES nnik
+    modules, and the max_error compared is the scenario's."""
+    from nnik.machine.scenario import load_scenario
+
+    _, _, calls, toml = traced_run
+    max_error = load_scenario(toml).target["max_error"]
+    deciding = [c for c in calls if c["stack"][-1][1] == "meets"
+                and any(m == "nnik.selection" and fn in ("choose", "choose_most_accurate") for m, fn in c["stack"])]
+    assert deciding, "the pick never compared a candidate's error with max_error"
+    for c in deciding:
+        assert c["max_error"] == max_error
+        mods = [m for m, _ in c["stack"] if m == "nnik" or m.startswith("nnik.")]
+        assert mods[0] == "nnik.cli", mods
+        chain = list(dict.fromkeys(mods))
+        assert len(chain) <= MAX_MODULES, " -> ".join(chain)

@@ -115,7 +115,8 @@ def test_fastc_does_not_import_export():
 #
 # A room is a top-level module or package of nnik/, with three splits: each implementation family's
 # folder is a room of its own ("implementations.<family>", minus its family.py), the families'
-# interface (the registry nnik.implementations and every <family>/family.py) is the room
+# interface (the registry nnik.implementations, every <family>/family.py and the MLP's
+# outputs.py) is the room
 # "implementations", and the estimator's calibration tools (which train through the pipeline)
 # are "estimate.tools". Rooms stand on layers, from the ground up; a module imports only from its
 # own layer or below (lazy imports count, as above):
@@ -154,7 +155,9 @@ def room(mod: str) -> str:
     if parts == ["__main__"]:
         return "cli"  # python -m nnik: the CLI's entry
     if parts[0] == "implementations":
-        if len(parts) == 1 or parts[-1] in ("family", "calibrate"):  # calibrate runs its family end to end
+        # calibrate runs its family end to end; the MLP's outputs (model.pt, c/mlp/ and their
+        # verification, which the estimator predicts) are its family as the pipeline writes it
+        if len(parts) == 1 or parts[-1] in ("family", "calibrate", "outputs"):
             return "implementations"
         if parts[1] in FAMILY_FOLDERS or (len(parts) > 2 and (NNIK / "implementations" / parts[1]).is_dir()):
             return f"implementations.{parts[1]}"

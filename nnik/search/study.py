@@ -197,9 +197,10 @@ def _spawned(outdir, url, name, n_total, families, worker):
 
 def search(outdir: Path, trials: int, url: str | None = None, name: str | None = None, jobs: int = 1,
            families: list[str] | None = None, progress: bool = True, worker_only: bool = False,
-           warm_start: bool = True) -> dict:
+           warm_start: bool = True, bests: list[tuple[str, dict]] | None = None) -> dict:
     """Run (or continue) the search to ``trials`` finished trials, then verify and pick (not with
-    ``worker_only``: a worker on one of several machines only runs trials)."""
+    ``worker_only``: a worker on one of several machines only runs trials). ``bests``: each
+    family's ladder best, just fitted by the caller, for the warm start (see :func:`warm`)."""
     import multiprocessing as mp
 
     if trials < 1 or jobs < 1:
@@ -221,7 +222,7 @@ def search(outdir: Path, trials: int, url: str | None = None, name: str | None =
     study = open_study(storage, name, scn.fingerprint, scn.name, list(DIRECTIONS))
     before = {t.number for t in _finished(study)}
     if warm_start and not study.get_trials(deepcopy=False):
-        warm(study, outdir, fams)
+        warm(study, outdir, fams, bests)
     t0 = time.perf_counter()
     procs = []
     if jobs > 1:
@@ -261,24 +262,29 @@ def trial_counts(study, before: set[int], mine: set[str], target: int) -> dict:
 
 def ladder_bests(problem, families: list[str]) -> list[tuple[str, dict]]:
     """Each family's best on the ladder for the problem's [target] (what `nnik run` picks from):
-    the cheapest configuration that meets max_error, else the most accurate."""
-    target = problem.scn.target
-    cands = sel.fit_ladder(problem, families, max_error=target["max_error"])
-    return [(fam, c.config) for fam, c in sel.family_bests(cands, target).items()]
+    the cheapest configuration that meets max_error, else the most accurate (pipeline.fit_bests)."""
+    _, bests = pipeline.fit_bests(problem, problem.scn.target, families)
+    return [(fam, c.config) for fam, c in bests.items()]
 
 
-def warm(study, outdir: Path, families: list[str]) -> int:
+def warm(study, outdir: Path, families: list[str], bests: list[tuple[str, dict]] | None = None) -> int:
     """Queue each family's ladder best first, then every family's ladder, as the new study's first
     trials: even a search of a few trials evaluates what `nnik run` would pick from, so it never
-    returns worse than the ladder, and can only improve on it; returns how many were queued."""
+    returns worse than the ladder, and can only improve on it; returns how many were queued.
+    The bests are ``bests`` (a ladder just fitted), else the ones a finished `nnik run` recorded
+    in OUTDIR for these very inputs and [target] (pipeline.stored_bests), else the ladder is fitted."""
     from itertools import chain, zip_longest
 
     problem = pipeline.problem_for(outdir)
-    bests = [params_of(fam, cfg) for fam, cfg in ladder_bests(problem, families)]
+    if bests is None:
+        bests = pipeline.stored_bests(outdir, problem.scn.target, families)
+    if bests is None:
+        bests = ladder_bests(problem, families)
+    queued = [params_of(fam, cfg) for fam, cfg in bests if fam in families]
     ladders = [[params_of(fam, cfg) for cfg in FAMILIES[fam].ladder(problem)] for fam in families]
     n = 0
     # the bests, then the families in turn: a short search sees each
-    for p in chain(bests, chain.from_iterable(zip_longest(*ladders))):
+    for p in chain(queued, chain.from_iterable(zip_longest(*ladders))):
         if p is not None:
             study.enqueue_trial(p, skip_if_exists=True)  # a best is also on its ladder: queued once
             n += 1
@@ -362,39 +368,27 @@ def finish(outdir: Path, study, url: str | None, info: dict, progress: bool = Tr
     cands = [_candidate(problem, t.user_attrs["family"], t.user_attrs["config"])
              for t in bar(chosen, desc="refit the front", unit="config", disable=not progress, leave=False)]
     bests = sel.family_bests([c for c in cands if c.impl is not None], target)
-    reachable = any(c.meets(target["max_error"]) for c in cands)
-    c_dir = outdir / pipeline.C_DIR
-    if reachable:  # only the points that meet max_error: a large MLP that misses takes minutes on gpsim
-        for c in bar([c for c in bests.values() if c.meets(target["max_error"])], desc="verify family bests",
-                      unit="family", disable=not progress, leave=False):
-            sel.verify_candidate(c, c_dir / sel.ALT_DIR / c.family, (outdir / "targets" / "families").resolve())
+    # only the points that meet max_error are verified: a large MLP that misses takes minutes on gpsim
+    pipeline.verify_bests(outdir, bests, progress, only_meeting=target["max_error"])
     rows = front_rows(front, target)
     by_key = {config_key(c.family, c.config): c for c in cands}
+    c_dir = outdir / pipeline.C_DIR
     verify_info = verify_front(outdir, rows, by_key, bests, target, c_dir / sel.ALT_DIR, progress)
     for c in bests.values():
         if not c.checks:  # shown with its estimate only
             why = {"not_run": f"misses max_error {target['max_error']:g}: not verified"}
             c.checks = {k: dict(why) for k in ("host", *TARGETS, *(f"{t}_portable" for t in TARGETS))}
-    pick = sel.choose(bests, target) if reachable else None
-    if reachable:
-        sel.write_choice(c_dir, bests, pick)
-    picked = None if pick is None else (pick.family, pick.impl.source_hash())
-    for r in rows:
-        r["picked"] = (r["family"], r.get("model_hash")) == picked
     states = {s.name.lower(): len(study.get_trials(deepcopy=False, states=(s,))) for s in TrialState}
-    section = {
-        "target": target, "input_unit_um": problem.unit_um, "check_points": int(len(problem.check[0])),
-        "check_set": "dense grid" if problem.analytic else "held-out rows", "source": "search",
-        "implementations": [c.row(picked=c is pick) for c in bests.values()],
-        "ladder": [c.row() for c in cands],
-        "pick": None if pick is None else {"family": pick.family, "config": pick.config, "describe": pick.impl.describe(),
-                                           "model_hash": pick.impl.source_hash(), "file": f"{problem.name}.c"},
-    }
     search_section = {"study": study.study_name, "storage": storage_kind(url), "trials": states, **info,
                       "feasible_front": len(ok_front), "front": rows, "front_verified": verify_info,
                       "front_families": sorted({t.user_attrs["family"] for t in front})}
-    pipeline.write_metrics(outdir, {"selection": section, "search": search_section})
-    if pick is None:
-        raise NnikError(sel.no_pick_reason(cands, bests, target), problem.scn.source, "[target]")
-    pick_state.seal(outdir, section)  # last: the pick, its metrics and hashes are all in place
+
+    def with_picked(pick) -> dict:
+        picked = None if pick is None else (pick.family, pick.impl.source_hash())
+        for r in rows:
+            r["picked"] = (r["family"], r.get("model_hash")) == picked
+        return {"search": search_section}
+
+    _, asked = pipeline.resolve_target(problem)
+    section = pipeline.conclude(outdir, problem, cands, bests, target, asked, source="search", extra=with_picked)
     return {"selection": section, "search": search_section}

@@ -25,14 +25,33 @@ def _model_key(config: dict) -> tuple:
     return ("mlp_model", tuple(config["hidden"]), config["mode"])
 
 
+def own_config(scn) -> dict:
+    """The scenario's own network ([network], [export]): the family's ladder, and what `nnik run`
+    keeps as model.pt."""
+    return {"hidden": list(scn.network["hidden"]), "mode": scn.network["mode"], "kernel": scn.export["kernel"],
+            "tanh": scn.export["tanh"], "weight_bits": scn.export["weight_bits"]}
+
+
 def remember_trained(problem: Problem, model) -> dict:
-    """Put an already trained model (e.g. ``nnik run``'s) into the problem's cache; returns the
-    matching config."""
-    scn = model.scenario
-    cfg = {"hidden": list(scn.network["hidden"]), "mode": scn.network["mode"], "kernel": scn.export["kernel"],
-           "tanh": scn.export["tanh"], "weight_bits": scn.export["weight_bits"]}
+    """Put an already trained model (model.pt of a finished `nnik run`, or the one a measured
+    machine's reference was fitted with) into the problem's cache; returns the matching config."""
+    cfg = own_config(model.scenario)
     problem.cache[_model_key(cfg)] = model
     return cfg
+
+
+def trained(problem: Problem):
+    """The network the family's fit trained (or was given) for the scenario's own configuration."""
+    return problem.cache.get(_model_key(own_config(problem.scn)))
+
+
+def train_network(scn, dataset, config: dict, progress: bool = False):
+    """The family's training: the network of ``config`` on the scenario's samples, with the
+    scenario's [training] budget (seeded: the same data give the same weights)."""
+    from nnik.implementations.mlp.train import train_model
+
+    net = {**scn.network, "hidden": tuple(config["hidden"]), "mode": config["mode"]}
+    return train_model(dataclasses.replace(scn, network=net), dataset, progress=progress)
 
 
 def _in_units(problem: Problem, model):
@@ -85,10 +104,8 @@ class MlpImpl(Implementation):
 
     @classmethod
     def ladder(cls, problem: Problem) -> list[dict]:
-        """The scenario's own network (trained by the pipeline); the search explores more."""
-        scn = problem.scn
-        return [{"hidden": list(scn.network["hidden"]), "mode": scn.network["mode"], "kernel": scn.export["kernel"],
-                 "tanh": scn.export["tanh"], "weight_bits": scn.export["weight_bits"]}]
+        """The scenario's own network (trained here, by :meth:`fit`); the search explores more."""
+        return [own_config(problem.scn)]
 
     @classmethod
     def fit(cls, problem: Problem, config: dict) -> "MlpImpl":
@@ -96,12 +113,8 @@ class MlpImpl(Implementation):
 
         key = _model_key(config)
         model = problem.cache.get(key)
-        if model is None:
-            from nnik.implementations.mlp.train import train_model
-
-            scn = problem.scn
-            net = {**scn.network, "hidden": tuple(config["hidden"]), "mode": config["mode"]}
-            model = train_model(dataclasses.replace(scn, network=net), problem.dataset, progress=False)
+        if model is None:  # the family's training: `nnik run`'s ladder trains the scenario's network here
+            model = train_network(problem.scn, problem.dataset, config)
             problem.cache[key] = model
         ds = problem.dataset
         tanh = None if config.get("tanh", "default") == "default" else config["tanh"]
