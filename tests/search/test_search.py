@@ -264,3 +264,47 @@ def test_a_short_search_is_never_worse_than_the_ladder(galvo_run, tmp_path, caps
     ladder_cycles = min(c.est[tg["chip"]]["cycles"] for c in bests.values() if c.meets(tg["max_error"]))
     assert row["pre_max"] <= tg["max_error"]
     assert row["estimate"][tg["chip"]]["cycles"] <= ladder_cycles + 1e-9
+
+
+def test_warm_start_reuses_a_finished_ladder(galvo_run, tmp_path):
+    """Issue 17: after a ladder selection (`nnik run`, `nnik select`) the warm start queues the
+    family bests it recorded, without fitting the ladder again, when its key holds: the same
+    data.npz and model.pt, the same [target] limits, and each family's C in c/alt/ still the C it
+    verified. Any change of the key fits the ladder again."""
+    from nnik import pipeline
+    from nnik import selection as sel
+
+    out = _copy_run(galvo_run, tmp_path / "warm")
+    section = pipeline.select(out, progress=False, families=["lut", "poly"])
+    problem = pipeline.problem_for(out)
+    tg = problem.scn.target
+    stored = pipeline.stored_bests(out, tg, ["lut", "poly"])
+    assert stored == [(r["family"], r["config"]) for r in section["implementations"]]
+    assert stored == search.ladder_bests(problem, ["lut", "poly"])  # what fitting the ladder again gives
+    fitted = []
+
+    def tracer(frame, event, arg):
+        if frame.f_code is sel.fit_ladder.__code__:
+            fitted.append(frame.f_locals.get("families"))
+
+    study = optuna.create_study(directions=list(search.DIRECTIONS))
+    sys.settrace(tracer)
+    try:
+        search.warm(study, out, ["lut", "poly"])
+    finally:
+        sys.settrace(None)
+    assert fitted == []
+    firsts = [t.system_attrs["fixed_params"] for t in study.get_trials(deepcopy=False)[:2]]  # queued, not run
+    assert firsts == [search.params_of(fam, cfg) for fam, cfg in stored]
+    # the key: another max_error, a family the selection did not fit, or other C in c/alt/
+    assert pipeline.stored_bests(out, {**tg, "max_error": tg["max_error"] * 2}, ["lut", "poly"]) is None
+    assert pipeline.stored_bests(out, tg, ["lut", "poly", "hybrid"]) is None
+    c_file = out / "c" / "alt" / "lut" / "galvo_cba2012.c"
+    c_file.write_text(c_file.read_text() + "/* edited */\n")
+    assert pipeline.stored_bests(out, tg, ["lut", "poly"]) is None
+    sys.settrace(tracer)
+    try:
+        search.warm(optuna.create_study(directions=list(search.DIRECTIONS)), out, ["lut", "poly"])
+    finally:
+        sys.settrace(None)
+    assert fitted == [["lut", "poly"]]
