@@ -132,9 +132,12 @@ def cmd_search(args) -> None:
         if not _trained_for(scn, out):
             if args.show:
                 raise NnikError("no trained model for this scenario here (run `nnik search` or `nnik run` first)", str(out))
-            console.print(f"[bold]nnik search[/bold] {scn.source} -> {out}/: the data and every family's ladder "
+            console.print(f"[bold]nnik search[/bold] {scn.source} -> {out}/: the data and the families' ladders "
                           "first (the mlp trains as its family's fit)")
-            res = pipeline.run(scn, out, progress=sys.stderr.isatty(), pick=False, mlp_verify=())
+            fams = search.searched_families(args.families.split(",") if args.families else None)
+            # the searched families' ladders, and the mlp's: its network is the study's model.pt
+            res = pipeline.run(scn, out, progress=sys.stderr.isatty(), pick=False, mlp_verify=(),
+                               families=list(dict.fromkeys(["mlp", *fams])))
             _warn_training(pipeline.load_pair(out)[0])
             bests = [(fam, c.config) for fam, c in res["bests"].items()]
     if not (out / pipeline.MODEL_FILE).is_file():

@@ -46,12 +46,13 @@ def generate(scn: Scenario, outdir: Path) -> Dataset:
 
 # ---- the stages ---------------------------------------------------------------------------------
 def run(scn: Scenario, outdir: Path, progress: bool = True, on_stage=None, pick: bool = True,
-        mlp_verify=("host", "avr", "pic18")) -> dict:
+        mlp_verify=("host", "avr", "pic18"), families=None) -> dict:
     """`nnik run`: every stage, every family alike (see the module docstring). ``on_stage(name,
     value)`` hears of each finished stage ("data": the Problem; "fitted": (candidates, family
     bests, the MLP family's trained network); "mlp": the MLP's own C verified on each of
     ``mlp_verify``). With ``pick`` false the run stops before the family bests are verified
     (`nnik run --search` and `nnik search SCENARIO` hand them to the search's warm start).
+    ``families``: only these (the mlp among them: its network is model.pt; default all).
     Returns the selection section, or {"problem", "candidates", "bests"} without ``pick``."""
     from nnik.implementations.mlp import family as mlp_family
 
@@ -59,7 +60,7 @@ def run(scn: Scenario, outdir: Path, progress: bool = True, on_stage=None, pick:
     problem = prepare(scn, outdir, progress)
     say("data", problem)
     target, asked = resolve_target(problem)
-    cands, bests = fit_bests(problem, target, progress=progress)
+    cands, bests = fit_bests(problem, target, families, progress)
     say("fitted", (cands, bests, mlp_family.trained(problem)))
     say("mlp", keep_mlp(problem, outdir, verify_on=mlp_verify))
     if not pick:

@@ -195,6 +195,20 @@ def _spawned(outdir, url, name, n_total, families, worker):
         release_locks()
 
 
+def searched_families(families: list[str] | None) -> list[str]:
+    """The families a search samples (default: every family with knobs in the space); one line
+    for a family that is unknown or has no knobs there."""
+    fams = list(families or [f for f in FAMILIES if f in SEARCHED])
+    bad = [f for f in fams if f not in FAMILIES]
+    if bad:
+        raise NnikError(f"unknown implementation family {bad[0]!r} (known: {', '.join(FAMILIES)})")
+    bad = [f for f in fams if f not in SEARCHED]
+    if bad:
+        raise NnikError(f"family {bad[0]!r} has no knobs in the search space (nnik/search/space.py); "
+                        f"searched: {', '.join(SEARCHED)}")
+    return fams
+
+
 def search(outdir: Path, trials: int, url: str | None = None, name: str | None = None, jobs: int = 1,
            families: list[str] | None = None, progress: bool = True, worker_only: bool = False,
            warm_start: bool = True, bests: list[tuple[str, dict]] | None = None) -> dict:
@@ -208,14 +222,7 @@ def search(outdir: Path, trials: int, url: str | None = None, name: str | None =
     import optuna
 
     optuna.logging.set_verbosity(optuna.logging.WARNING)
-    fams = list(families or [f for f in FAMILIES if f in SEARCHED])
-    bad = [f for f in fams if f not in FAMILIES]
-    if bad:
-        raise NnikError(f"unknown implementation family {bad[0]!r} (known: {', '.join(FAMILIES)})")
-    bad = [f for f in fams if f not in SEARCHED]
-    if bad:
-        raise NnikError(f"family {bad[0]!r} has no knobs in the search space (nnik/search/space.py); "
-                        f"searched: {', '.join(SEARCHED)}")
+    fams = searched_families(families)
     scn = pipeline.load_pair(outdir)[0].scenario
     name = name or study_name(scn)
     storage = open_storage(url, outdir)  # bad URL, unreachable server, other scenario: fail before any work
