@@ -97,12 +97,9 @@ def judge_run(outdir: Path, truth: Scenario) -> dict:
 
 
 def run_scenario(toml: Path, out: Path) -> None:
-    """`nnik run` without the report: generate, train, evaluate, select (verified on the simulators)."""
-    scn = load_scenario(toml)
-    pipeline.generate(scn, out)
-    pipeline.train(scn, out, progress=False)
-    pipeline.evaluate(out)
-    pipeline.select(out, progress=False)
+    """`nnik run`'s pipeline without the MLP's own C (c/mlp/) and the report: data and reference,
+    every family's ladder, each family's best verified on the simulators, the pick."""
+    pipeline.run(load_scenario(toml), out, progress=False, mlp_verify=())
 
 
 def goal_cases(work: Path) -> list[tuple[str, Path, Scenario]]:
