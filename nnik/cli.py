@@ -135,9 +135,10 @@ def cmd_search(args) -> None:
             console.print(f"[bold]nnik search[/bold] {scn.source} -> {out}/: the data and the families' ladders "
                           "first (the mlp trains as its family's fit)")
             fams = search.searched_families(args.families.split(",") if args.families else None)
-            # the searched families' ladders, and the mlp's: its network is the study's model.pt
-            res = pipeline.run(scn, out, progress=sys.stderr.isatty(), pick=False, mlp_verify=(),
-                               families=list(dict.fromkeys(["mlp", *fams])))
+            # the mlp's ladder (its network is the study's model.pt), and the searched families' for
+            # the warm start
+            fams = ["mlp"] if args.no_warm_start else list(dict.fromkeys(["mlp", *fams]))
+            res = pipeline.run(scn, out, progress=sys.stderr.isatty(), pick=False, mlp_verify=(), families=fams)
             _warn_training(pipeline.load_pair(out)[0])
             bests = [(fam, c.config) for fam, c in res["bests"].items()]
     if not (out / pipeline.MODEL_FILE).is_file():
