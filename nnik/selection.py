@@ -35,8 +35,11 @@ class Candidate:
 
     @property
     def claimed_max(self) -> float:
-        """The accuracy claimed and judged against max_error: pre_max plus the problem's
-        error_floor (a measured machine's reference error; 0 for an exact IK)."""
+        """The accuracy claimed and judged against max_error: pre_max for an exact IK; for a
+        measured machine, the error against the machine its reference's bootstrap supports
+        (accuracy()'s ``claimed_max``: the implementation's error field plus the reference's)."""
+        if "claimed_max" in self.acc:
+            return self.acc["claimed_max"]
         return self.acc.get("pre_max", float("inf")) + (self.impl.problem.error_floor if self.impl is not None else 0.0)
 
     def meets(self, max_error: float) -> bool:
@@ -80,7 +83,9 @@ def fit_ladder(problem: Problem, families=None, progress=None, max_error: float 
     growth: dict[str, dict] = {}  # family -> {grown knob value: best error at it}
     for fam, cfg in jobs:
         c = Candidate(fam, cfg)
-        stalled = _stalled(FAMILIES[fam].grows_by, cfg, growth.get(fam, {}))
+        within = FAMILIES[fam].grows_within
+        gkey = (fam, cfg.get(within)) if within else fam
+        stalled = _stalled(FAMILIES[fam].grows_by, cfg, growth.get(gkey, {}))
         if max_error is not None and met.get(fam, 0) >= ENOUGH:
             c.skipped = f"not fitted: {ENOUGH} cheaper configurations of the ladder already meet max_error"
         elif stalled:
@@ -99,7 +104,7 @@ def fit_ladder(problem: Problem, families=None, progress=None, max_error: float 
                 met[fam] = met.get(fam, 0) + 1
             knob = FAMILIES[fam].grows_by
             if knob and c.impl is not None:
-                g = growth.setdefault(fam, {})
+                g = growth.setdefault(gkey, {})
                 g[cfg[knob]] = min(g.get(cfg[knob], float("inf")), c.acc["pre_max"])
         out.append(c)
         if bar:

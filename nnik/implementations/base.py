@@ -56,6 +56,9 @@ class Implementation(ABC):
     # a config knob the ladder grows (e.g. a polynomial's degree): selection.fit_ladder stops a
     # family's ladder once STALL_STEPS values of it in a row no longer improve the family's error
     grows_by: ClassVar[str | None] = None
+    # a config knob whose values each grow ``grows_by`` separately (the polynomial's width: its
+    # 32-bit degrees do not stall on the 16-bit ones' errors)
+    grows_within: ClassVar[str | None] = None
 
     def __init__(self, problem: Problem, config: dict):
         self.problem = problem

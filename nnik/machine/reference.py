@@ -16,15 +16,13 @@ Noise, in output units per output, in this order of preference: what the scenari
 ``[mechanism] noise_um``: position noise, 1 sigma per axis, carried through the affine map's
 Jacobian), then the spread of repeated marks, then the Gaussian process's fitted white noise.
 
-Error of the chosen reference against the machine, net of the noise: the CV residual r at a
-mark is (reference error there) + (noise), the two independent, so
+Error of the chosen reference against the machine, net of the noise:
 
-* RMS: ``sqrt(max(mean r^2 + MS_MARGIN x its standard error - noise variance, RMS_FLOOR^2 x mean r^2))``
-  (with the noise near the fit error, the difference is small against the mean's own scatter: one
-  standard error keeps the estimate from going below the truth by luck of the draw);
-* max: ``MAX_OVER_RMS`` x that RMS, and never below the largest CV residual less the noise's own
-  bound (3 sigma, or step/2 for rounding): the CV residuals are predictions a fold away from
-  the marks, the same reach as the space between marks.
+* RMS: the CV residual r at a mark is (reference error there) + (noise), the two independent, so
+  ``sqrt(max(mean r^2 + MS_MARGIN x its standard error - noise variance, RMS_FLOOR^2 x mean r^2))``;
+* max (the error floor) and every implementation's claim: a parametric bootstrap of the chosen
+  candidate under the noise model (nnik.machine.ref_claim): the LEVEL quantile of the replicates'
+  max error over the marks' hull.
 
 This module is machine/data level: it never imports nnik.implementations.
 """
@@ -37,6 +35,8 @@ from typing import Callable
 
 import numpy as np
 
+from nnik.machine.ref_claim import BOOT, LEVEL, ErrorFields, add_unresolved, bootstrap_fields
+
 FOLDS = 10  # k of the k-fold CV; leave-one-out up to LOO_MARKS marks (a fold then leaves the fewest gaps)
 LOO_MARKS = 100
 CV_SEED = 0
@@ -46,7 +46,6 @@ GP_MAX_MARKS = 1500  # a GP fit is O(n^3): beyond this it is left out (and the r
 RBF_MAX_MARKS = 4000  # beyond this the spline is local (64 nearest marks)
 MS_MARGIN = 1.0  # standard errors of the CV mean square added before the noise is taken off (an upper estimate)
 RMS_FLOOR = 0.2  # the estimated RMS is at least this fraction of the CV RMS (the noise is never known exactly)
-MAX_OVER_RMS = 3.0  # max/RMS of a smooth error field over a dense 2-D grid (measured on synthetic machines)
 CHUNK = 100_000
 
 
@@ -55,6 +54,7 @@ class Noise:
     variance: np.ndarray  # (2,) output units^2
     bound: np.ndarray  # (2,) the noise's practical bound (step/2 for rounding, 3 sigma otherwise)
     source: str
+    step: float = 0.0  # the readings' rounding step: that part of the variance is uniform, the rest Gaussian
 
     def to_dict(self) -> dict:
         return {"variance": self.variance.tolist(), "std": np.sqrt(self.variance).tolist(), "bound": self.bound.tolist(),
@@ -174,6 +174,12 @@ class Reference:
     cv_max: np.ndarray
     detail: str = ""
     extra: dict = field(default_factory=dict)
+    fields: ErrorFields | None = None  # the bootstrap's draws of the error field (nnik.machine.ref_claim)
+
+    def claim(self, p_mm: np.ndarray, d: np.ndarray) -> float:
+        """The max error against the machine an implementation claims at positions p_mm where it
+        errs by d (N, 2) against this reference (see nnik.machine.ref_claim)."""
+        return self.fields.claim(p_mm, d)
 
     def __call__(self, p_mm: np.ndarray) -> np.ndarray:
         p = np.asarray(p_mm, dtype=np.float64).reshape(-1, 2)
@@ -204,11 +210,12 @@ class Reference:
                 "candidates": self.scores, "noise": self.noise.to_dict(),
                 "cv_rms": self.cv_rms.tolist(), "cv_max_abs": self.cv_max.tolist(),
                 "est_rms": self.est_rms.tolist(), "est_max": self.est_max.tolist(), "error_max": self.error_max,
-                "noise_floor": self.noise_floor, "hull": self.hull.to_dict(),
+                "noise_floor": self.noise_floor, "hull": self.hull.to_dict(), "claim_level": LEVEL,
                 "method": (f"{folds_for(self.n_marks)}-fold CV among the candidates; est. RMS = sqrt(CV mean square "
                            f"+ {MS_MARGIN:g} standard error - noise variance), "
-                           f"at least {RMS_FLOOR:g} x CV RMS; est. max = max({MAX_OVER_RMS:g} x est. RMS, largest CV "
-                           "residual - the noise's bound)"), **self.extra}
+                           f"at least {RMS_FLOOR:g} x CV RMS; est. max = the {LEVEL:g} quantile of the max "
+                           f"over the marks' hull of the reference's error in a parametric bootstrap "
+                           f"({self.fields.method if self.fields is not None else '-'}) under the noise model"), **self.extra}
 
 
 def known_noise(q: np.ndarray, jac: np.ndarray, reading_step: float = 0.0, noise_um: float = 0.0) -> Noise | None:
@@ -223,7 +230,7 @@ def known_noise(q: np.ndarray, jac: np.ndarray, reading_step: float = 0.0, noise
     bound = reading_step / 2 + 3 * np.sqrt(pos_var)
     parts = ([f"readings rounded to {reading_step:g} (uniform, variance {reading_step ** 2 / 12:.4g})"] if reading_step
              else []) + ([f"position noise {noise_um:g} um (1 sigma)"] if noise_um else [])
-    return Noise(var, bound, "stated: " + " + ".join(parts))
+    return Noise(var, bound, "stated: " + " + ".join(parts), float(reading_step))
 
 
 def repeated_noise(p_mm: np.ndarray, q: np.ndarray) -> Noise | None:
@@ -324,10 +331,32 @@ def fit_reference(p_mm: np.ndarray, q: np.ndarray, noise: Noise | None = None,
     ms = (r ** 2).mean(0)
     se = (r ** 2).std(0) / np.sqrt(n)  # standard error of the CV mean square: few marks, wide margin
     est_rms = np.sqrt(np.maximum(ms - noise.variance + MS_MARGIN * se, RMS_FLOOR ** 2 * ms))
-    est_max = np.maximum(MAX_OVER_RMS * est_rms, np.abs(r).max(0) - noise.bound)
     detail = f"smoothing {best_s:g}" if chosen == "rbf" else ""
-    return Reference(chosen, n, pr, scale, a, noise, convex_hull(p_mm), scores, est_rms, est_max, _rms(r),
-                     np.abs(r).max(0), detail)
+    hull = convex_hull(p_mm)
+    ref = Reference(chosen, n, pr, scale, a, noise, hull, scores, est_rms, np.zeros(2), _rms(r), np.abs(r).max(0), detail)
+    # the error field's bootstrap: the chosen candidate refitted to replicate readings (an outside
+    # model borrows the best refittable candidate's refit)
+    boot = chosen if chosen in fits else min(fits, key=lambda k: float((resid[k] ** 2).mean()))
+    ref.fields = bootstrap_fields(_refit(fits[boot], scale), x, ref(p_mm), ref, (p_mm.min(0), p_mm.max(0)),
+                                  lambda pq: hull.inside(pq, 1e-6), noise,
+                                  f"{BOOT} replicates of {boot}" + ("" if boot == chosen else f" (for {chosen})"))
+    add_unresolved(ref.fields, p_mm, r, noise, float(np.linalg.norm(np.ptp(hull.points, 0))))
+    ref.est_max = ref.fields.floors()
+    return ref
+
+
+def _refit(fit: Callable, scale: "_Scaled") -> Callable:
+    """fit (a candidate's residual fit) -> refit(x, q): the affine map and the candidate refitted
+    to readings q at scaled inputs x, as a predictor of positions in mm."""
+    def refit(x, q):
+        a, *_ = np.linalg.lstsq(_poly_features(x, 1), q, rcond=None)
+        f = fit(x, q - _poly_features(x, 1) @ a)
+
+        def predict(p_mm):
+            xq = scale.x(p_mm)
+            return _poly_features(xq, 1) @ a + f(xq)
+        return predict
+    return refit
 
 
 HULL_WARN = 0.99  # warn when the marks' hull covers less than this fraction of [workspace]

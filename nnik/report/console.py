@@ -117,9 +117,9 @@ def print_reference(m: dict, pick_row: dict) -> None:
     console.print(f"reference: {ref['chosen']} fitted to {ref['marks']} marks (CV RMS {cv}); noise {ref['noise']['source']}; "
                   f"est. error vs the machine max {ref['error_max']:.3g} {unit}, noise floor {ref['noise_floor']:.3g} {unit}")
     if "claimed_max" in pick_row:
-        console.print(f"claimed max error of the pick: {pick_row['claimed_max']:.3g} {unit} = reference "
-                      f"{ref['error_max']:.3g} + implementation {pick_row['pre_max']:.3g} (vs the reference), inside the "
-                      "marks' hull")
+        console.print(f"claimed max error of the pick: {pick_row['claimed_max']:.3g} {unit} inside the marks' hull "
+                      f"(implementation {pick_row['pre_max']:.3g} vs the reference, with the reference's bootstrapped "
+                      f"error, {ref['error_max']:.3g} alone)")
     if ref.get("workspace_warning"):
         console.print(f"[bold yellow]warning:[/bold yellow] {ref['workspace_warning']}")
 

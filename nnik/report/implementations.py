@@ -53,19 +53,28 @@ def pick_sentence(sel: dict, unit: str) -> str:
         return not_verified_sentence(pick)
     if pick is None:
         return f"No family met max_error {tg['max_error']:g} {unit} within the limits on {chip}."
-    s = (f"nnik picks {pick['describe']}: {pick['pre_max']:.4f} {unit} before rounding, {pick['cycles'][chip]:.0f} "
+    claim = (f" (claimed {pick['claimed_max']:.4f} {unit} against the machine, its reference's error included)"
+             if "claimed_max" in pick else "")
+    s = (f"nnik picks {pick['describe']}: {pick['pre_max']:.4f} {unit} before rounding{claim}, {pick['cycles'][chip]:.0f} "
          f"cycles and {pick['flash_bytes'][chip]} B of flash on {chip}.")
     s += versus_other_family([comparable(r, chip) for r in rows if lookup(r, "cycles", chip) is not None], pick, tg,
                              unit)
-    missing = [r for r in rows if r["pre_max"] > tg["max_error"]]
+    missing = [r for r in rows if judged_max(r) > tg["max_error"]]
     if missing:
-        s += " Missing the target: " + "; ".join(f"{r['family']} (best {r['pre_max']:.4f} {unit})" for r in missing) + "."
+        s += " Missing the target: " + "; ".join(f"{r['family']} (best {judged_max(r):.4f} {unit})" for r in missing) + "."
     return s
 
 
+def judged_max(r: dict) -> float:
+    """The error a row is judged by against max_error: its claimed max for a measured machine
+    (the reference's error included), else its pre-rounding max."""
+    return r.get("claimed_max", r["pre_max"])
+
+
 def comparable(r: dict, chip: str) -> dict:
-    """A measured selection row as {family, describe, pre_max, cycles, flash} on the chip."""
-    return {"family": r["family"], "describe": r.get("describe"), "pre_max": r["pre_max"],
+    """A measured selection row as {family, describe, pre_max, cycles, flash} on the chip
+    (pre_max: the error it is judged by, judged_max)."""
+    return {"family": r["family"], "describe": r.get("describe"), "pre_max": judged_max(r),
             "cycles": r["cycles"][chip], "flash": r["flash_bytes"][chip]}
 
 
@@ -99,12 +108,12 @@ def mlp_sentence(sel: dict, unit: str) -> str | None:
     if mlp.get("picked"):
         return f"The MLP earns its place here: it is the cheapest family that meets the target on {chip}."
     better = [r for r in rows if r is not mlp and lookup(r, "cycles", chip) is not None
-              and r["pre_max"] <= mlp["pre_max"] and r["cycles"][chip] <= mlp["cycles"][chip]]
+              and judged_max(r) <= judged_max(mlp) and r["cycles"][chip] <= mlp["cycles"][chip]]
     if better:
         b = min(better, key=lambda r: r["cycles"][chip])
-        return (f"The MLP loses here: {b['describe']} is at least as accurate ({b['pre_max']:.4f} vs "
-                f"{mlp['pre_max']:.4f} {unit}) and {mlp['cycles'][chip] / b['cycles'][chip]:.2f}x faster on {chip}.")
-    return (f"The MLP ({mlp['pre_max']:.4f} {unit}, {mlp['cycles'][chip]:.0f} cycles on {chip}) is not dominated: no "
+        return (f"The MLP loses here: {b['describe']} is at least as accurate ({judged_max(b):.4f} vs "
+                f"{judged_max(mlp):.4f} {unit}) and {mlp['cycles'][chip] / b['cycles'][chip]:.2f}x faster on {chip}.")
+    return (f"The MLP ({judged_max(mlp):.4f} {unit}, {mlp['cycles'][chip]:.0f} cycles on {chip}) is not dominated: no "
             "other family is both at least as accurate and at least as fast.")
 
 

@@ -7,10 +7,13 @@ from nnik.report.document import D_UNIT, Section, Table, lookup, num, txt
 
 
 def claim_sentence(ref: dict, row: dict, unit: str) -> str:
-    """The pick's claimed max error as reference error + implementation error."""
-    return (f"The pick claims max {row['claimed_max']:.3g} {unit} against the machine inside the marks' hull: the "
-            f"reference's estimated error {ref['error_max']:.3g} {unit} plus the implementation's "
-            f"{row['pre_max']:.3g} {unit} against the reference (pre-rounding; the C's rounding adds up to 0.5). "
+    """The pick's claimed max error: its error field against the reference combined with the
+    reference's bootstrapped error fields (nnik.machine.ref_claim)."""
+    return (f"The pick claims max {row['claimed_max']:.3g} {unit} against the machine inside the marks' hull "
+            f"(pre-rounding; the C's rounding adds up to 0.5): the {ref.get('claim_level', 0.9):g} quantile, over the "
+            f"reference's bootstrap replicates, of the max of its error against the reference "
+            f"({row['pre_max']:.3g} {unit} at most) plus the replicate's error field (the reference alone: "
+            f"{ref['error_max']:.3g} {unit}). "
             f"The noise floor of the readings is {ref['noise_floor']:.3g} {unit} (1 sigma).")
 
 
@@ -37,7 +40,7 @@ def build(ctx) -> Section | None:
         sec.paragraphs.append(claim_sentence(ref, pick, unit))
     src = lookup(sel, "target", "max_error_source")
     if src:
-        sec.paragraphs.append(f"max_error {lookup(sel, 'target', 'max_error'):g} {unit} ({src}) applies to that sum.")
+        sec.paragraphs.append(f"max_error {lookup(sel, 'target', 'max_error'):g} {unit} ({src}) applies to that claim.")
     t = Table("reference-candidates", "Reference candidates: held-out RMS residual per output (includes the noise)",
               ["candidate", f"CV RMS ({unit})", f"CV max ({unit})", "note", "chosen"])
     for name, c in (ref.get("candidates") or {}).items():

@@ -18,7 +18,7 @@ from __future__ import annotations
 
 from nnik.files.c_hash import dir_hash
 from nnik.report.document import D_CYC, D_UNIT, Cell, Fig, Section, Table, keypath, not_run_cell, num, txt
-from nnik.report.implementations import (CHIPS, _c_hash, _check_cell, best_point, comparable, estimated_costs,
+from nnik.report.implementations import (CHIPS, _c_hash, _check_cell, best_point, comparable, estimated_costs, judged_max,
                                          float_ik_cycles, not_verified_sentence, searched, versus_other_family)
 
 PNG = "search_front.png"
@@ -66,7 +66,7 @@ def pick_sentence(ctx, srch: dict, sel: dict) -> str:
     cyc, fl = pick["cycles"][chip], pick["flash_bytes"][chip]
     s = (f"`nnik search` picks {pick['describe']}: {pick['pre_max']:.4f} {unit} before rounding, {cyc:.0f} cycles and "
          f"{fl} B of flash on {chip}, measured on the simulator.")
-    rows = [{"family": r["family"], "describe": r.get("describe"), "pre_max": r["pre_max"],
+    rows = [{"family": r["family"], "describe": r.get("describe"), "pre_max": judged_max(r),
              "cycles": r["measured"][chip]["cycles"], "flash": r["measured"][chip]["flash_bytes"]}
             for r in srch["front"] if current(ctx, r) and chip in r["measured"]]
     rows += [comparable(r, chip) for r in sel["implementations"]

@@ -5,19 +5,25 @@ Random belt frames (CoreXY/HBOT, skew and distortion) are 'measured' with nnik.m
 scattered or on a grid, whole-microstep counter readings (+-0.5 of rounding). The reference and
 the families' ladders (poly, lut, hybrid; no MLP training, no simulators) then run as in
 `nnik run`, on a coarser check grid. The claimed max error of every family's best that meets
-max_error must not be better than the truth by more than HONEST (claimed >= 0.7 x true max over
-the marks' hull). `make bench` runs the larger sweep (python -m nnik.bench.measured --sweep N).
+max_error (the bootstrap of nnik.machine.ref_claim) must not be better than the truth by more
+than HONEST, nor worse than CLAIM_OVER times it (HONEST x true <= claimed <= CLAIM_OVER x true,
+true: the max over the marks' hull). Hypothesis draws the frames (NNIK_HYPOTHESIS_MACHINES, 3 in
+CI); `make bench` runs more, and the larger sweep (python -m nnik.bench.measured --sweep N).
 """
 
 from __future__ import annotations
 
+import os
+
 import numpy as np
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 from nnik import pipeline
 
 from nnik.machine import reference
-from nnik.bench.measured import HONEST, measured_toml, random_belt_toml
+from nnik.bench.measured import CLAIM_OVER, HONEST, measured_toml, random_belt_toml
 from nnik.machine.data import build_dataset, exact_targets
 from nnik.errors import NnikError
 from nnik.implementations import problem as problem_mod
@@ -25,6 +31,7 @@ from nnik.machine.scenario import load_scenario
 from nnik.machine.synth import synthesize_measurements
 
 FAMILIES = ["poly", "lut", "hybrid"]
+EXAMPLES = int(os.environ.get("NNIK_HYPOTHESIS_MACHINES", "3"))
 
 
 def measured_machine(tmp_path, seed: int, n: int, sampling: str, inset_mm: float = 5.0):
@@ -61,11 +68,14 @@ def test_stated_rounding_is_the_noise_model(tmp_path):
     assert "rounded" in noise.source
 
 
-@pytest.mark.parametrize("seed,n,sampling", [(11, 100, "sobol"), (12, 49, "grid"), (13, 150, "sobol")])
-def test_claimed_accuracy_is_not_better_than_the_truth(tmp_path, coarse_check, seed, n, sampling):
+@settings(max_examples=EXAMPLES, deadline=None, database=None,
+          suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
+@given(seed=st.integers(0, 10_000), n=st.sampled_from([49, 100, 150, 200, 400]),
+       sampling=st.sampled_from(["sobol", "grid"]))
+def test_claimed_accuracy_is_within_its_margin_of_the_truth(tmp_path_factory, coarse_check, seed, n, sampling):
     from nnik import selection as sel
 
-    truth, scn = measured_machine(tmp_path, seed, n, sampling)
+    truth, scn = measured_machine(tmp_path_factory.mktemp("frame"), seed, n, sampling)
     problem = pipeline.build_problem(scn, build_dataset(scn))
     ref = problem.reference
     assert ref.name in ref.scores and "cv_rms" in ref.scores[ref.name]
@@ -75,7 +85,7 @@ def test_claimed_accuracy_is_not_better_than_the_truth(tmp_path, coarse_check, s
     assert len(pts) > 1000 and ref.hull.inside(problem.to_mm(pts), 1e-6).all()
     exact = exact_targets(truth, problem.to_mm(pts))
     ref_true = np.abs(ref_q - exact).max()
-    assert ref.error_max >= HONEST * ref_true, (ref.error_max, ref_true)
+    assert HONEST * ref_true <= ref.error_max <= CLAIM_OVER * ref_true, (ref.error_max, ref_true)
     # no [target]: the default is defined and above the reference's own error
     assert problem.scn.target["max_error"] >= max(0.25, ref.error_max)
     assert problem.scn.target["max_error_source"].startswith("default")
@@ -84,8 +94,10 @@ def test_claimed_accuracy_is_not_better_than_the_truth(tmp_path, coarse_check, s
     assert bests, "no family meets the default max_error"
     for c in bests:
         true = np.abs(c.impl.run(pts).pre - exact).max()
-        assert c.claimed_max == pytest.approx(c.acc["pre_max"] + ref.error_max)
-        assert c.claimed_max >= HONEST * true, (c.impl.describe(), c.claimed_max, true)
+        # the claim combines the implementation's error field with the reference's: never more
+        # than their maxima added
+        assert c.claimed_max <= c.acc["pre_max"] + ref.fields.emax + 1e-9
+        assert HONEST * true <= c.claimed_max <= CLAIM_OVER * true, (c.impl.describe(), c.claimed_max, true)
 
 
 def test_header_names_the_reference_not_the_exact_ik(tmp_path, coarse_check):

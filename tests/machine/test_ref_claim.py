@@ -1,0 +1,67 @@
+"""The pieces of a measured machine's claim (nnik.machine.ref_claim), on fields whose answer is
+known: the deconvolution of rounding noise, the correlation length of the residuals, and how an
+implementation's error field combines with the reference's."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from nnik.machine import ref_claim
+from nnik.machine.reference import Noise
+
+
+def test_deconvolution_finds_the_amplitude_under_rounding_noise():
+    rng = np.random.default_rng(0)
+    amp = 0.3
+    u = amp * np.sin(rng.uniform(0, 2 * np.pi, 4000))  # an arcsine distribution, bounded by amp
+    r = u + rng.uniform(-0.5, 0.5, u.size)
+    atoms, w = ref_claim.deconvolve(r, 1.0, np.full(r.size, 1e-3))
+    assert w.sum() == pytest.approx(1.0)
+    cdf = np.cumsum(w)
+    hi = atoms[np.searchsorted(cdf, 0.995)]
+    assert 0.8 * amp <= hi <= 1.25 * amp  # while max |r| is near amp + 0.5
+    assert np.abs(r).max() > amp + 0.4
+
+
+def test_correlation_length_of_a_smooth_field():
+    rng = np.random.default_rng(1)
+    p = rng.uniform(0, 100, (600, 2))
+    ell = 20.0
+    # a smooth field sampled at the marks plus independent noise (the pairs' products drop it)
+    k = rng.normal(size=(40, 2)) / ell
+    ph = rng.uniform(0, 2 * np.pi, 40)
+    field = np.sqrt(2 / 40) * np.cos(p @ k.T + ph).sum(1)
+    r = np.stack([field, field], 1) * 0.2 + rng.normal(0, 0.3, (600, 2))
+    got = ref_claim.correlation_length(p, r, np.array([0.04, 0.04]), float(np.hypot(100, 100)))
+    assert 0.5 * ell <= got <= 2 * ell
+
+
+def _fields(value: np.ndarray) -> ref_claim.ErrorFields:
+    g = 9
+    f = np.broadcast_to(value[:, None, None, :], (len(value), g, g, 2)).astype(np.float32).copy()
+    return ref_claim.ErrorFields(np.zeros(2), np.ones(2), f, np.ones((g, g), bool), "test")
+
+
+def test_the_claim_follows_the_alignment_not_the_sum_of_maxima():
+    # replicates: the reference is off by +-0.2 everywhere, half the replicates each way
+    ef = _fields(np.array([[0.2, 0.2]] * 10 + [[-0.2, -0.2]] * 10))
+    p = np.random.default_rng(2).uniform(0, 1, (500, 2))
+    d = np.zeros((500, 2))
+    d[0] = [0.5, 0.0]  # the implementation's peak
+    assert ef.claim(p, d) == pytest.approx(0.7)  # the LEVEL quantile: some replicate adds at the peak
+    d[1] = [-0.5, 0.0]  # a peak of each sign: every replicate adds at one of them
+    assert ef.claim(p, d) == pytest.approx(0.7)
+    assert ef.floors() == pytest.approx([0.2, 0.2])
+    ef0 = _fields(np.zeros((20, 2)))
+    assert ef0.claim(p, d) == pytest.approx(0.5)  # an exact reference: the implementation's own max
+
+
+def test_noise_draws_follow_the_model():
+    rng = np.random.default_rng(3)
+    rounding = Noise(np.full(2, 1 / 12), np.full(2, 0.5), "rounded", 1.0)
+    n = ref_claim.draw_noise(rng, rounding, 20000)
+    assert np.abs(n).max() <= 0.5 and n.var() == pytest.approx(1 / 12, rel=0.05)
+    gauss = Noise(np.full(2, 0.04), np.full(2, 0.6), "position")
+    g = ref_claim.draw_noise(rng, gauss, 20000)
+    assert g.std() == pytest.approx(0.2, rel=0.05) and np.abs(g).max() > 0.6
