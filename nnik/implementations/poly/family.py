@@ -18,7 +18,9 @@ output: the last factor of an odd output is a constant plus a finer residual: on
 more bits),
 ``lsb`` (the bits the input shift drops, 0 .. 2^k - 1, enter each output linearly with a fitted
 slope: one more product per input, and the int16 input no longer limits the accuracy), ``guard``
-(extra headroom bits; when given, the range analysis must prove it as is).
+(extra headroom bits; when given, the range analysis must prove it as is), ``width`` (16: int16
+values as above; 32: the wide path, int32 values and 64-bit products, unshifted int32 inputs:
+:mod:`nnik.implementations.poly.wide`; no split, no dropped-bits correction).
 
 A final product by a constant whose int16 rounding would cost more than ``CONST_TOL`` output
 units gets a second product with the constant's remainder (affine belt machines need it).
@@ -34,12 +36,13 @@ from nnik.implementations.problem import Problem
 from nnik.implementations.poly import fit as poly_fit
 
 from nnik.implementations.poly import int_model as poly_int
-DEFAULTS = {"degree": 5, "fit": "best", "coef_bits": 16, "split": False, "trim": 4, "rounding": True, "lsb": False}
+DEFAULTS = {"degree": 5, "fit": "best", "coef_bits": 16, "split": False, "trim": 4, "rounding": True, "lsb": False,
+            "width": 16}
+WIDE_FROM = 3  # the wide (32-bit) rungs start at this degree
 MAX_DEGREE = 9  # what fit() accepts; the ladder stops earlier once a degree no longer improves the fit
 CONST_TOL = 1e-3  # output units: a final constant multiplier rounded worse than this gets a low part
 NEGLIGIBLE = 1e-6  # output units: a term smaller than this over the domain is dropped
 KNOBS = set(DEFAULTS) | {"degree_x", "degree_y", "guard"}
-MAX_LOWER = 12  # rounds of "lower the failing value's exponent" before giving up
 RANGE_GRID = 257
 
 
@@ -69,6 +72,7 @@ class PolyImpl(Implementation):
     family = "poly"
     doc = "bivariate polynomial per output, symmetric terms only, Horner in int16 on the hardware multiplier"
     grows_by = "degree"
+    grows_within = "width"  # the degree grows, and stalls, separately in 16 and in 32 bits
 
     @classmethod
     def ladder(cls, problem: Problem) -> list[dict]:
@@ -76,7 +80,9 @@ class PolyImpl(Implementation):
         skipped; selection.fit_ladder stops growing the degree once the fit stops improving, see
         ``grows_by``); per degree, without and with the dropped-input-bits correction (when an input
         shift drops bits); no split, the split of each output, of both; from degree 3 each also
-        with floor steps (3 AVR cycles a step cheaper). The fit is chosen per output ("best")."""
+        with floor steps (3 AVR cycles a step cheaper). The fit is chosen per output ("best").
+        Then the wide rungs (``width`` 32), degree WIDE_FROM and up: selection reaches them only
+        when the 16-bit ladder has not met the target (they cost several times the cycles)."""
         sym = _symmetry(problem)
         maps = poly_fit.axis_maps(problem)
         lsbs = (False, True) if any(m.k > 0 for m in maps) else (False,)
@@ -92,7 +98,9 @@ class PolyImpl(Implementation):
                     for r in ((True,) if d < 3 else (True, False)):
                         out.append({"degree": d, "fit": "best", "coef_bits": 16, "split": sp, "trim": 4,
                                     "rounding": r, "lsb": lsb})
-        return out
+        wide = sorted({cfg["degree"] for cfg in out if cfg["degree"] >= WIDE_FROM})
+        return out + [{"degree": d, "fit": "best", "coef_bits": 32, "split": False, "trim": 4, "rounding": True,
+                       "lsb": False, "width": 32} for d in wide]
 
     @classmethod
     def fit(cls, problem: Problem, config: dict) -> "PolyImpl":
@@ -105,6 +113,10 @@ class PolyImpl(Implementation):
             raise NnikError(f"poly: degree must be an integer in 1..{MAX_DEGREE}, got {deg!r}")
         if cfg["coef_bits"] not in (16, 32):
             raise NnikError(f"poly: coef_bits must be 16 or 32, got {cfg['coef_bits']!r}")
+        if cfg["width"] not in (16, 32):
+            raise NnikError(f"poly: width must be 16 or 32, got {cfg['width']!r}")
+        if cfg["width"] == 32 and (cfg["split"] or cfg["lsb"] or cfg["coef_bits"] != 32):
+            raise NnikError("poly: width 32 takes coef_bits 32, no split and no lsb (its inputs keep every bit)")
         split = cfg["split"]
         if not (isinstance(split, bool) or (isinstance(split, list) and len(split) == 2
                                             and all(isinstance(v, bool) for v in split))):
@@ -125,13 +137,16 @@ class PolyImpl(Implementation):
                     for o in range(2)]
         self.fits = hows
         t, q, delta = poly_fit.fit_data(problem)
+        wide = cfg["width"] == 32
+        if wide:  # unshifted inputs: the fit is in the exact t
+            t = t + delta
         self.coefs, self.lsb = [], []
         for o in range(2):
             terms = poly_fit.monomials(self.sym[o], deg, cfg.get("degree_x"), cfg.get("degree_y"))
             # the dropped input bits enter linearly, for each axis the output depends on
             axes = [a for a in range(2) if cfg["lsb"] and self.maps[a].k > 0 and
                     not (self.sym[o].indep_x if a == 0 else self.sym[o].indep_y)]
-            key = ("poly_coefs", o, tuple(terms), hows[o], tuple(axes))
+            key = ("poly_coefs", o, tuple(terms), hows[o], tuple(axes)) + (("exact t",) if wide else ())
             if key not in problem.cache:
                 problem.cache[key] = poly_fit.fit_poly(t, q[:, o], terms, hows[o],
                                                        delta[:, axes] if axes else None)
@@ -151,6 +166,11 @@ class PolyImpl(Implementation):
                 for a in range(2)]
 
     def _build(self) -> None:
+        if self.config["width"] == 32:
+            from nnik.implementations.poly import wide
+
+            wide.build(self, RANGE_GRID)
+            return
         ur = self._urange()
         gx = np.unique(np.rint(np.linspace(*ur[0], RANGE_GRID)))
         gy = np.unique(np.rint(np.linspace(*ur[1], RANGE_GRID)))
@@ -174,26 +194,19 @@ class PolyImpl(Implementation):
             env[f"e_{nm}"] = 15 + k
         for plan in self.plans:
             plan.terms = poly_int.split_constants(plan.terms, env, CONST_TOL)
-        guard = self.config.get("guard")
-        lower: dict = {}
-        for _ in range(MAX_LOWER + 1):
-            prog = poly_int.build_program(self.plans, env, self.config["coef_bits"], guard or 0, ur, lower,
-                                          trim=self.config["trim"], rounding=self.config["rounding"])
-            bad = poly_int.prove(prog, ur, tuple((1 << max(m.k, 0)) - 1 for m in self.maps))
-            if bad is None:
-                self.prog = prog
-                return
-            if guard is not None or bad.startswith("out"):
-                break
-            lower[bad] = lower.get(bad, 0) + 1
-        raise NnikError(f"poly: range analysis cannot prove {bad} within int16/int32 "
-                        f"({self.describe()})")
+        self.prog = poly_int.build_proven(self.plans, env, self.config, ur,
+                                          tuple((1 << max(m.k, 0)) - 1 for m in self.maps), self.describe)
 
     def run(self, in_units: np.ndarray) -> IntRun:
         p = self.problem
         c, flags = p.clamp(in_units)
-        num = poly_int.evaluate(self.prog, self.maps[0].u(c[:, 0]), self.maps[1].u(c[:, 1]),
-                                self.maps[0].r(c[:, 0]), self.maps[1].r(c[:, 1]))
+        if self.config["width"] == 32:
+            from nnik.implementations.poly import wide
+
+            num = wide.run_num(self, c)
+        else:
+            num = poly_int.evaluate(self.prog, self.maps[0].u(c[:, 0]), self.maps[1].u(c[:, 1]),
+                                    self.maps[0].r(c[:, 0]), self.maps[1].r(c[:, 1]))
         pre = np.empty(num.shape, dtype=np.float64)
         out = np.empty(num.shape, dtype=np.int64)
         for k, o in enumerate(self.prog.outs):
@@ -216,7 +229,8 @@ class PolyImpl(Implementation):
             (", split " + "+".join(n for n, v in zip(self.problem.outputs, sp) if v) if any(sp) else "")
         fits = getattr(self, "fits", None) or [c["fit"]] * 2
         fit_text = fits[0] if fits[0] == fits[1] else "/".join(fits)
-        return (f"poly {deg}, {fit_text}, {c['coef_bits']}-bit coefficients{sp_text}, "
+        wide = ", 32-bit Horner (int32 values, 64-bit products)" if c.get("width") == 32 else ""
+        return (f"poly {deg}, {fit_text}, {c['coef_bits']}-bit coefficients{wide}{sp_text}, "
                 f"{n} coefficients; {self.symmetry_text() if hasattr(self, 'sym') else ''}")
 
     @property
@@ -225,6 +239,10 @@ class PolyImpl(Implementation):
 
     def model_bytes(self) -> int:
         """Constants in the code: int16 coefficients (int32 in 32-bit mode), int32 sums."""
+        if self.config["width"] == 32:
+            from nnik.implementations.poly import wide
+
+            return wide.model_bytes(self)
         cb = 2 if self.config["coef_bits"] == 16 else 4
         n = sum(cb if isinstance(st.L, int) or (st.K and self.config["coef_bits"] == 32) else 0
                 for st in self.prog.steps)
@@ -240,6 +258,10 @@ class PolyImpl(Implementation):
         from nnik.implementations.poly.p18 import p18_body
 
         p = self.problem
+        if self.config["width"] == 32:
+            from nnik.implementations.poly import wide
+
+            return wide.render(self)
         used = poly_c.lsb_used(self.prog)
         avr_asm = poly_avr.body(self.prog, p.code_range, p.name)
         name = p.name
@@ -262,6 +284,10 @@ class PolyImpl(Implementation):
     def estimate(self, target: str) -> dict:
         from nnik.implementations.poly.cost import estimate
 
+        if self.config["width"] == 32:
+            from nnik.implementations.poly import wide
+
+            return wide.estimate(self, target)
         return estimate(self, target)
 
 

@@ -8,6 +8,10 @@ coefficient mode the coefficient itself), an arithmetic shift ``f`` and ``L`` an
 or an earlier value; ``dst`` is an int16. Each value ``n`` stands for ``n * 2^-e`` (``e`` its
 exponent); the inputs ``u``, ``v`` have ``e = 15`` (``t = u / 2^15``). An output is
 ``num = C + sum_k ((A_k * B_k) >> t_k)`` in int32 and ``pre = num / 2^s + offset``.
+
+``width = 32`` (the wide path, nnik.implementations.poly.wide) is the same program one size up:
+int32 values and constants, exact int64 products, shifts up to 63, the inputs unshifted
+(``e = 15 + k``); the output sums stay int32.
 """
 
 from __future__ import annotations
@@ -20,6 +24,16 @@ import numpy as np
 from nnik.errors import NnikError
 
 I16 = 32767
+
+
+def vmax(width: int) -> int:
+    """The largest value of a step's result: int16 or int32."""
+    return (1 << (width - 1)) - 1
+
+
+def fmax(width: int) -> int:
+    """The largest shift of a product (int32 or int64)."""
+    return 2 * width - 1
 MARGIN = 1.0 / 64  # headroom over the sampled range (the interval proof is the real check)
 SLACK = 8  # int16 units for the rounding errors that accumulate in a chain
 F_MAX = 31
@@ -92,12 +106,13 @@ class OutputPlan:
     shape: str  # e.g. "u * H(u^2, v^2)"
 
 
-def const_exp(c: float, cap: int = 40) -> int:
-    """The finest exponent e with |round(c 2^e)| <= 32767."""
+def const_exp(c: float, cap: int = 40, width: int = 16) -> int:
+    """The finest exponent e with |round(c 2^e)| <= 32767 (2^31 - 1 for width 32)."""
+    lim = vmax(width)
     if c == 0:
         return cap
-    e = min(cap, math.floor(math.log2(I16 / abs(c))))
-    while abs(round(c * 2.0**e)) > I16:
+    e = min(cap, math.floor(math.log2(lim / abs(c))))
+    while abs(round(c * 2.0**e)) > lim:
         e -= 1
     return e
 
@@ -204,8 +219,8 @@ class Program:
         return len(self.steps) + sum(len(o.terms) for o in self.outs)
 
 
-def _emax(m: float, guard: int) -> int:
-    lim = I16 * 2.0 ** (-guard) / (1 + MARGIN) - SLACK
+def _emax(m: float, guard: int, width: int = 16) -> int:
+    lim = vmax(width) * 2.0 ** (-guard) / (1 + MARGIN) - SLACK
     if m <= 0:
         return 40
     return math.floor(math.log2(lim / m))
@@ -231,16 +246,22 @@ def _topo(plans: list[OutputPlan]) -> list[Node]:
 
 def build_program(plans: list[OutputPlan], grid_env: dict, coef_bits: int, guard: int,
                   urange: list[tuple[int, int]], lower: dict | None = None, trim: int = 0,
-                  rounding: bool = True) -> Program:
+                  rounding: bool = True, width: int = 16) -> Program:
     """Exponents from the sampled real ranges (minus `lower` extra bits per node), then the
     integer steps. `trim`: a constant multiplier may give up to this many bits so that its step
-    shifts by 16 (free on an 8-bit MCU); `rounding`: round half up in each step (else floor)."""
+    shifts by 16 (free on an 8-bit MCU); `rounding`: round half up in each step (else floor);
+    `width`: 16, or 32 for the wide path (grid_env's e_u, e_v: the inputs' exponents)."""
+    F_MAX = fmax(width)  # noqa: N806 - the module's 16-bit constant, per width
+    cap_e = 40 if width == 16 else 72
+    def cexp(c):
+        return const_exp(c, cap_e, width)
+
     lower = lower or {}
     env = dict(grid_env)
     nodes = _topo(plans)
     cap: dict = {}
     for _ in range(4 * len(nodes) + 4):
-        exps = {"u": 15, "v": 15, "rx": grid_env.get("e_rx", 15), "ry": grid_env.get("e_ry", 15)}
+        exps = {"u": grid_env.get("e_u", 15), "v": grid_env.get("e_v", 15), "rx": grid_env.get("e_rx", 15), "ry": grid_env.get("e_ry", 15)}
         for n in nodes:
             val = n.value(env)
             ea = exps[n.a.name]
@@ -248,13 +269,13 @@ def build_program(plans: list[OutputPlan], grid_env: dict, coef_bits: int, guard
                 eb = exps[n.b.name]
                 prod = n.a.value(env) * n.b.value(env)
             else:
-                eb = const_exp(n.b)
+                eb = cexp(n.b)
                 prod = n.a.value(env) * n.b
-            e = min(_emax(np.abs(val).max(), guard), cap.get(n.name, 99))
+            e = min(_emax(np.abs(val).max(), guard, width), cap.get(n.name, 99))
             if isinstance(n.add, Node):
-                e = min(e, exps[n.add.name], _emax(np.abs(prod).max(), guard))
+                e = min(e, exps[n.add.name], _emax(np.abs(prod).max(), guard, width))
             elif n.add is not None:
-                e = min(e, _emax(abs(n.add), guard))  # 32-bit mode falls back to L when K is too wide
+                e = min(e, _emax(abs(n.add), guard, width))  # 32-bit mode falls back to L when K is too wide
             e = min(e, ea + eb) - lower.get(n.name, 0)
             if isinstance(n.add, Node):
                 exps[n.add.name] = e  # lowering an earlier value's exponent is always safe
@@ -278,9 +299,9 @@ def build_program(plans: list[OutputPlan], grid_env: dict, coef_bits: int, guard
         if isinstance(n.b, Node):
             eb, b = exps[n.b.name], n.b.name
         else:
-            eb = min(const_exp(n.b), e + F_MAX - ea)
-            if 16 < ea + eb - e <= 16 + trim:
-                eb = e + 16 - ea
+            eb = min(cexp(n.b), e + F_MAX - ea)
+            if width < ea + eb - e <= width + trim:
+                eb = e + width - ea
             b = int(round(n.b * 2.0**eb))
             if b == 0:
                 raise NnikError(f"poly: coefficient {n.b:g} vanishes at 2^-{eb}")
@@ -294,7 +315,7 @@ def build_program(plans: list[OutputPlan], grid_env: dict, coef_bits: int, guard
                 raise NnikError(f"poly: {n.add.name} is not aligned with {n.name}")
         elif n.add is None:
             K, L = half, None
-        elif coef_bits == 32 and abs(n.add) * 2.0 ** (ea + eb) < 2.0**29:
+        elif coef_bits == 32 and abs(n.add) * 2.0 ** (ea + eb) < 2.0 ** (2 * width - 3):
             K, L = int(round(n.add * 2.0 ** (ea + eb))) + half, None
         else:
             K, L = half, int(round(n.add * 2.0**e))
@@ -302,7 +323,7 @@ def build_program(plans: list[OutputPlan], grid_env: dict, coef_bits: int, guard
     for p in plans:
         et = []
         for A, B in p.terms:
-            eb = exps[B.name] if isinstance(B, Node) else const_exp(B)
+            eb = exps[B.name] if isinstance(B, Node) else cexp(B)
             et.append(exps[A.name] + eb)
         tot = sum(A.value(env) * (B.value(env) if isinstance(B, Node) else B) for A, B in p.terms) \
             if p.terms else np.zeros(1)
@@ -313,10 +334,31 @@ def build_program(plans: list[OutputPlan], grid_env: dict, coef_bits: int, guard
             raise NnikError("poly: output range does not fit int32")
         terms = []
         for (A, B), e_ in zip(p.terms, et):
-            b = B.name if isinstance(B, Node) else int(round(B * 2.0 ** const_exp(B)))
+            b = B.name if isinstance(B, Node) else int(round(B * 2.0 ** cexp(B)))
             terms.append((A.name, b, e_ - s))
         prog.outs.append(OutInt(int(round((p.c00 - offset) * 2.0**s)), terms, s, offset))
     return prog
+
+
+MAX_LOWER = 12  # rounds of "lower the failing value's exponent" before giving up
+
+
+def build_proven(plans: list[OutputPlan], env: dict, config: dict, urange: list[tuple[int, int]],
+                 rmax: tuple[int, int], describe, width: int = 16) -> Program:
+    """build_program, then prove; a value the proof fails gets its exponent lowered by one bit
+    and the program is built again (MAX_LOWER rounds; with a ``guard`` the first must hold)."""
+    guard = config.get("guard")
+    lower: dict = {}
+    for _ in range(MAX_LOWER + 1):
+        prog = build_program(plans, env, config["coef_bits"], guard or 0, urange, lower,
+                             trim=config["trim"], rounding=config["rounding"], width=width)
+        bad = prove(prog, urange, rmax, width)
+        if bad is None:
+            return prog
+        if guard is not None or bad.startswith("out"):
+            break
+        lower[bad] = lower.get(bad, 0) + 1
+    raise NnikError(f"poly: range analysis cannot prove {bad} within int{width}/int{2 * width} ({describe()})")
 
 
 # ---- interval proof ----------------------------------------------------------------------------
@@ -335,12 +377,17 @@ def _imul(alo, ahi, blo, bhi, same: bool):
     return c.min(0), c.max(0)
 
 
-def prove(prog: Program, urange: list[tuple[int, int]], rmax: tuple[int, int] = (0, 0)) -> str | None:
+def prove(prog: Program, urange: list[tuple[int, int]], rmax: tuple[int, int] = (0, 0), width: int = 16) -> str | None:
     """Interval arithmetic over BOXES x BOXES boxes of (u, v): every value in int16, every
     product + K and every partial output sum in int32. Returns the first failing value's name,
     or None; fills prog.bounds."""
+    vm, pm = vmax(width), vmax(2 * width)
     ulo, uhi = _box_edges(*urange[0], BOXES)
+    if width > 16:  # int64 products + K: exact in Python integers
+        ulo, uhi = ulo.astype(object), uhi.astype(object)
     vlo, vhi = _box_edges(*urange[1], BOXES)
+    if width > 16:
+        vlo, vhi = vlo.astype(object), vhi.astype(object)
     iv = {"u": (ulo[:, None] + 0 * vlo[None, :], uhi[:, None] + 0 * vhi[None, :]),
           "v": (0 * ulo[:, None] + vlo[None, :], 0 * uhi[:, None] + vhi[None, :]),
           "rx": (np.int64(0), np.int64(rmax[0])), "ry": (np.int64(0), np.int64(rmax[1]))}
@@ -356,13 +403,15 @@ def prove(prog: Program, urange: list[tuple[int, int]], rmax: tuple[int, int] = 
         blo, bhi = get(st.b)
         plo, phi = _imul(alo, ahi, blo, bhi, st.a == st.b)
         plo, phi = plo + st.K, phi + st.K
-        if plo.min() < i32lo or phi.max() > i32hi:
+        if plo.min() < -pm - 1 or phi.max() > pm:
             return st.dst
         rlo, rhi = plo >> st.f, phi >> st.f
+        if width > 16 and (rlo.min() < -vm - 1 or rhi.max() > vm):  # the C adds L to an int32
+            return st.dst
         if st.L is not None:
             llo, lhi = get(st.L)
             rlo, rhi = rlo + llo, rhi + lhi
-        if rlo.min() < -I16 - 1 or rhi.max() > I16:
+        if rlo.min() < -vm - 1 or rhi.max() > vm:
             return st.dst
         iv[st.dst] = (rlo, rhi)
         prog.bounds[st.dst] = (int(rlo.min()), int(rhi.max()))
@@ -383,20 +432,23 @@ def prove(prog: Program, urange: list[tuple[int, int]], rmax: tuple[int, int] = 
 
 # ---- the numpy model ---------------------------------------------------------------------------
 
-def evaluate(prog: Program, u: np.ndarray, v: np.ndarray, rx: np.ndarray, ry: np.ndarray) -> np.ndarray:
-    """(N,) int64 u, v (and the dropped bits rx, ry) -> (N, 2) int64 num, checking every range."""
+def evaluate(prog: Program, u: np.ndarray, v: np.ndarray, rx: np.ndarray, ry: np.ndarray,
+             width: int = 16) -> np.ndarray:
+    """(N,) int64 u, v (and the dropped bits rx, ry) -> (N, 2) int64 num, checking every range.
+    Width 32: |a|, |b| < 2^31, so a * b is exact in int64, and prove() bounds a * b + K within it."""
+    vm = vmax(width)
     vals = {"u": u.astype(np.int64), "v": v.astype(np.int64), "rx": rx.astype(np.int64), "ry": ry.astype(np.int64)}
 
     def get(b):
         return vals[b] if isinstance(b, str) else np.int64(b)
 
     for st in prog.steps:
-        p = vals[st.a] * get(st.b) + st.K
-        if p.size and (p.min() < -(2**31) or p.max() >= 2**31):
+        p = vals[st.a] * get(st.b) + np.int64(st.K)
+        if width == 16 and p.size and (p.min() < -(2**31) or p.max() >= 2**31):
             raise NnikError(f"poly: int32 overflow in {st.dst}")
         r = (p >> st.f) + (get(st.L) if st.L is not None else 0)
-        if r.size and (r.min() < -I16 - 1 or r.max() > I16):
-            raise NnikError(f"poly: int16 overflow in {st.dst}")
+        if r.size and (r.min() < -vm - 1 or r.max() > vm):
+            raise NnikError(f"poly: int{width} overflow in {st.dst}")
         vals[st.dst] = r
     nums = []
     for o in prog.outs:
