@@ -28,7 +28,8 @@ test: setup toolchains
 # per-target tables (MLP kernels, float math.h IK, LUT, seed 000 Table 1), then the estimator's
 # validation sweep (predicted vs measured cycles and flash on 11 architectures x 2 tanh); the measured
 # machines' claimed accuracy against a known truth (nnik.bench.measured), and
-# 300 random G-code jobs per machine on the simulated Uno against the Python model (CI runs 10)
+# 300 random G-code jobs per machine on the simulated Uno against the Python model (CI runs 10),
+# 30 random galvos and 20 random belt frames through the ladders, 12 random measured frames' claims
 bench: setup toolchains
 	$(PYTHON) -m nnik.bench.mlp $(SCENARIO)
 	$(PYTHON) -m nnik.bench.families
@@ -38,6 +39,7 @@ bench: setup toolchains
 	$(PYTHON) -m nnik.estimate sweep --kernel fast --tanh '' --arch 4 --arch 6 --arch 8 --arch 10 --arch 12 --arch 16
 	NNIK_HYPOTHESIS_EXAMPLES=300 $(PYTHON) -m pytest -q tests/firmware/gcode/test_gcode_hypothesis.py
 	NNIK_HYPOTHESIS_MACHINES=30 $(PYTHON) -m pytest -q tests/implementations/test_random_machines.py
+	NNIK_HYPOTHESIS_MACHINES=12 $(PYTHON) -m pytest -q tests/machine/test_reference.py
 
 clean:
 	rm -rf build $(STAMP)

@@ -1,9 +1,11 @@
 """Random machines nobody shipped (issue 15): random gimbal and two-mirror geometries over
-asymmetric, off-centre fields, steppers and 12/16-bit DACs. Wherever a float reference fit,
+asymmetric, off-centre fields, steppers and 12/16-bit DACs, and random belt frames (CoreXY and
+HBOT with skew, bow, stretch, racking and pulley eccentricity). Wherever a float reference fit,
 computed here, says a target is reachable in a few hundred bytes, the ladder reaches it, and the
 family best it returns is bit-exact in C on the host.
 
-CI draws a few machines (NNIK_HYPOTHESIS_MACHINES, default 3); `make bench` draws more."""
+CI draws a few machines (NNIK_HYPOTHESIS_MACHINES, default 3, and two thirds as many belt
+frames); `make bench` draws more."""
 
 from __future__ import annotations
 
@@ -13,6 +15,7 @@ import numpy as np
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from nnik.bench.measured import BELT_DISTORTION, BELT_SPANS, belt_toml
 from nnik.implementations.accuracy import accuracy
 from nnik.selection import family_bests, fit_ladder
 from tests.implementations.lut_helpers import host_check, problem_from
@@ -44,6 +47,13 @@ def machines(draw):
             f'y_mm = [{y[0]}, {y[1]}]\n{unit}')
 
 
+@st.composite
+def belt_frames(draw):
+    """A CoreXY or HBOT frame, its distortion drawn from the ranges make bench's measured sweep uses."""
+    dist = {k: draw(st.floats(lo, hi)) for k, (lo, hi) in BELT_DISTORTION.items()}
+    return belt_toml("rnd", draw(st.sampled_from(["corexy", "hbot"])), draw(st.sampled_from(BELT_SPANS)), dist)
+
+
 def float_reference_error(p) -> float:
     """Max error of a float64 least-squares polynomial of FLOAT_DEGREE over the domain."""
     def basis(pts):
@@ -57,15 +67,31 @@ def float_reference_error(p) -> float:
     return float(np.abs(basis(chk) @ coef - p.truth(chk)).max())
 
 
-@settings(max_examples=EXAMPLES, deadline=None, database=None,
-          suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
+SETTINGS = dict(deadline=None, database=None, suppress_health_check=[HealthCheck.function_scoped_fixture,
+                                                                    HealthCheck.too_slow])
+
+
+@settings(max_examples=EXAMPLES, **SETTINGS)
 @given(text=machines())
 def test_the_ladder_reaches_what_a_float_fit_reaches(tmp_path_factory, text):
+    reaches(tmp_path_factory, text)
+
+
+@settings(max_examples=max(1, (2 * EXAMPLES) // 3), **SETTINGS)
+@given(text=belt_frames())
+def test_the_ladder_reaches_what_a_float_fit_reaches_on_belt_frames(tmp_path_factory, text):
+    reaches(tmp_path_factory, text)
+
+
+def reaches(tmp_path_factory, text: str) -> None:
+    """The property: a target twice the float fit's error is met by a family best of at most
+    16 KB, that best's claim holds on the full check set, and its C is the integer model."""
     d = tmp_path_factory.mktemp("rnd")
     (d / "rnd.toml").write_text(text + f"[target]\nmax_error = 1.0\n")
     p = problem_from(d / "rnd.toml")
     target = max(2.0 * float_reference_error(p), TARGET_FLOOR)
-    cands = fit_ladder(p, ["poly", "lut"], max_error=target)
+    belt = p.scn.mechanism.kind in ("corexy", "hbot")
+    cands = fit_ladder(p, ["poly", "lut", "hybrid"] if belt else ["poly", "lut"], max_error=target)
     bests = family_bests(cands, {"chip": "avr", "max_error": target})
     meeting = [c for c in bests.values() if c.meets(target)]
     assert meeting, (text, target, {f: c.acc.get("pre_max") for f, c in bests.items()})

@@ -8,8 +8,10 @@ int16 intermediates round at about 2^-15 of it).
 * Values and constants int32, products exact in 64 bits, exponents by the same range analysis
   and interval proof (``nnik.implementations.poly.int_model`` with ``width=32``); the outputs'
   sums stay int32.
-* C: ``codegen/templates/poly32_ik.c.j2``, one portable path (the 32 x 32 -> 64 product from four
-  16 x 16 -> 32 partial products in two 32-bit halves: SDCC's pic16 port has no 64-bit type).
+* C: ``codegen/templates/poly32_ik.c.j2``: on avr-gcc the 32 x 32 -> 64 product column by
+  column on the hardware multiplier (16 MUL in one asm block), the byte pick and the last
+  0..7-bit shift of each call inlined; elsewhere (host, SDCC pic16, which has no 64-bit type)
+  four 16 x 16 -> 32 partial products in two 32-bit halves, shifts bytewise under SDCC.
 * Cost: calls of the product routine (steps and output terms) and the shifts by fewer than 32
   bits, a linear model calibrated on simavr / gpsim (``nnik/calibration/poly32.json``,
   ``python -m nnik.implementations.poly.calibrate --wide``).
