@@ -69,21 +69,33 @@ def precompensated(planned: np.ndarray, fs: float, f_hz, zeta, smooth_s: float) 
     return ref, invert(ref, fs, f_hz, zeta)
 
 
-def gcode(base_mm: np.ndarray, fs: float, every: int, origin_mm: np.ndarray, header: list[str]) -> list[str]:
-    """G1 lines through every every-th base sample (program mm, 4 decimals: 0.1 um), each with
-    the feed that takes it there in every / fs seconds; repeated points are dropped."""
-    pts = base_mm[::every]
-    if len(base_mm) and (len(base_mm) - 1) % every:
-        pts = np.concatenate([pts, base_mm[-1:]])
-    prog = pts - origin_mm
-    lines = list(header) + ["G21", "G90", f"G0 X{prog[0, 0]:.4f} Y{prog[0, 1]:.4f}"]
-    dt_min = every / fs / 60.0
-    last = prog[0]
-    for p in prog[1:]:
+def gcode(base_mm: np.ndarray, fs: float, every: int, origin_mm: np.ndarray, header: list[str],
+          tool: list[str] | None = None) -> tuple[list[str], list[int]]:
+    """(lines, src): G1 lines through every every-th base sample (program mm, 4 decimals: 0.1 um),
+    each with the feed that takes it there in every / fs seconds, and for each line the sample
+    index it goes to (-1: not a move).  tool[k], when given, is a line to insert before the move
+    to sample k (a tool change); repeated points are dropped."""
+    n = len(base_mm)
+    keep = list(range(0, n, every))
+    if n and keep[-1] != n - 1:
+        keep.append(n - 1)
+    if tool:
+        keep = sorted(set(keep) | {k for k, t in enumerate(tool) if t})
+    prog = base_mm - origin_mm
+    lines, src = list(header) + ["G21", "G90", f"G0 X{prog[0, 0]:.4f} Y{prog[0, 1]:.4f}"], [-1] * (len(header) + 2) + [0]
+    last, last_k = prog[0], 0
+    for k in keep[1:]:
+        if tool and tool[k]:
+            lines.append(tool[k])
+            src.append(-1)
+        p = prog[k]
         d = float(np.hypot(*(p - last)))
         if d < 1e-4:
             continue
+        dt_min = (k - last_k) / fs / 60.0
         lines.append(f"G1 X{p[0]:.4f} Y{p[1]:.4f} F{max(d / dt_min, 1.0):.1f}")
-        last = p
+        src.append(k)
+        last, last_k = p, k
     lines.append("M400")
-    return lines
+    src.append(-1)
+    return lines, src

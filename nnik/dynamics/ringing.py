@@ -28,8 +28,13 @@ def tip_track(base_mm: np.ndarray, tick_hz: float, dyn: dict, tail_s: float = TA
 def events(planned_mm: np.ndarray, sample_hz: float, corner_deg: float = CORNER_DEG) -> np.ndarray:
     """Times (s) of each stop (the planned motion comes to rest) and each corner (its direction
     turns by more than corner_deg between consecutive moving samples) of planned samples (N, 2)."""
+    return event_index(planned_mm, corner_deg) / sample_hz
+
+
+def event_index(planned_mm: np.ndarray, corner_deg: float = CORNER_DEG) -> np.ndarray:
+    """events() as sample indices (the sample at which the motion has stopped or turned)."""
     if len(planned_mm) < 3:
-        return np.zeros(0)
+        return np.zeros(0, np.int64)
     d = np.diff(planned_mm, axis=0)
     speed = np.hypot(d[:, 0], d[:, 1])
     moving = speed > 1e-9
@@ -42,7 +47,7 @@ def events(planned_mm: np.ndarray, sample_hz: float, corner_deg: float = CORNER_
     # a turn between adjacent moving samples (a start after a rest is not a corner)
     turn = np.flatnonzero((cosang < np.cos(np.radians(corner_deg))) & (np.diff(idx) == 1))
     corners = idx[turn + 1]
-    return np.unique(np.concatenate([stops, corners])) / sample_hz
+    return np.unique(np.concatenate([stops, corners])).astype(np.int64)
 
 
 def ringing(dev_um: np.ndarray, tick_hz: float, at_s: np.ndarray, window_s=WINDOW_S) -> dict:

@@ -70,7 +70,9 @@ def test_smoothing_keeps_the_ends_and_gcode_reaches_them():
     p = l_path(100.0, 5000.0, 1000)
     q = smooth(p, 1000, 0.01)
     assert np.allclose(q[0], p[0]) and np.allclose(q[-1], p[-1])
-    lines = gcode(q, 1000, 5, np.array([0.0, 0.0]), ["; test"])
-    assert lines[0] == "; test" and lines[-1] == "M400"
+    lines, src = gcode(q, 1000, 5, np.array([0.0, 0.0]), ["; test"])
+    assert lines[0] == "; test" and lines[-1] == "M400" and len(src) == len(lines)
+    assert all(s == -1 for s, ln in zip(src, lines) if not ln.startswith(("G0 X", "G1")))
+    assert [s for s in src if s >= 0] == sorted(s for s in src if s >= 0)
     last = lines[-2].split()
     assert float(last[1][1:]) == 10.0 and float(last[2][1:]) == 10.0
