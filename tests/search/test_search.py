@@ -308,3 +308,35 @@ def test_warm_start_reuses_a_finished_ladder(galvo_run, tmp_path):
     finally:
         sys.settrace(None)
     assert fitted == [["lut", "poly"]]
+
+
+def test_search_of_a_new_scenario_fits_the_ladder_once(tmp_path, capsys):
+    """Issue 17: `nnik search SCENARIO` on an empty OUTDIR runs the pipeline's own data and ladder
+    stage (the mlp trains there, as its family's fit: model.pt) and hands the family bests to the
+    warm start, which does not fit the ladder again."""
+    from nnik import selection as sel
+    from nnik.implementations.mlp.train import train_model
+    from tests.conftest import DATASETS, write_toml
+
+    text = (DATASETS / "galvo_cba2012.toml").read_text()
+    text = text.replace("n_train = 1000", "n_train = 300").replace("n_test = 20000", "n_test = 2000")
+    text = text.replace("max_seconds = 60", "max_seconds = 4\nrestarts = 1\nadam_steps = 500")
+    out = tmp_path / "out"
+    calls = []
+
+    def tracer(frame, event, arg):
+        if frame.f_code in (sel.fit_ladder.__code__, train_model.__code__):
+            calls.append((frame.f_code.co_name, frame.f_locals.get("families")))
+
+    sys.settrace(tracer)
+    try:
+        rc = main(["search", str(write_toml(tmp_path, text)), "-o", str(out), "--trials", "2", "--families", "lut"])
+    finally:
+        sys.settrace(None)
+    assert rc == 0, capsys.readouterr().err
+    assert calls == [("fit_ladder", ["mlp", "lut"]), ("train_model", None)]
+    m = search.pipeline.load_metrics(out)
+    assert (out / "model.pt").is_file() and m["selection"]["source"] == "search"
+    lut_best = search.ladder_bests(search.pipeline.problem_for(out), ["lut"])[0][1]
+    first = min(_study(out).get_trials(deepcopy=False), key=lambda t: t.number)
+    assert first.user_attrs["config"] == {**lut_best, "k": list(lut_best["k"])}  # the warm start's first trial
