@@ -288,11 +288,12 @@ def test_warm_start_reuses_a_finished_ladder(galvo_run, tmp_path):
             fitted.append(frame.f_locals.get("families"))
 
     study = optuna.create_study(directions=list(search.DIRECTIONS))
+    before = sys.gettrace()
     sys.settrace(tracer)
     try:
         search.warm(study, out, ["lut", "poly"])
     finally:
-        sys.settrace(None)
+        sys.settrace(before)
     assert fitted == []
     firsts = [t.system_attrs["fixed_params"] for t in study.get_trials(deepcopy=False)[:2]]  # queued, not run
     assert firsts == [search.params_of(fam, cfg) for fam, cfg in stored]
@@ -302,11 +303,12 @@ def test_warm_start_reuses_a_finished_ladder(galvo_run, tmp_path):
     c_file = out / "c" / "alt" / "lut" / "galvo_cba2012.c"
     c_file.write_text(c_file.read_text() + "/* edited */\n")
     assert pipeline.stored_bests(out, tg, ["lut", "poly"]) is None
+    before = sys.gettrace()
     sys.settrace(tracer)
     try:
         search.warm(optuna.create_study(directions=list(search.DIRECTIONS)), out, ["lut", "poly"])
     finally:
-        sys.settrace(None)
+        sys.settrace(before)
     assert fitted == [["lut", "poly"]]
 
 
@@ -328,11 +330,12 @@ def test_search_of_a_new_scenario_fits_the_ladder_once(tmp_path, capsys):
         if frame.f_code in (sel.fit_ladder.__code__, train_model.__code__):
             calls.append((frame.f_code.co_name, frame.f_locals.get("families")))
 
+    before = sys.gettrace()
     sys.settrace(tracer)
     try:
         rc = main(["search", str(write_toml(tmp_path, text)), "-o", str(out), "--trials", "2", "--families", "lut"])
     finally:
-        sys.settrace(None)
+        sys.settrace(before)
     assert rc == 0, capsys.readouterr().err
     assert calls == [("fit_ladder", ["mlp", "lut"]), ("train_model", None)]
     m = search.pipeline.load_metrics(out)
