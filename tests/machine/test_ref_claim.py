@@ -65,3 +65,20 @@ def test_noise_draws_follow_the_model():
     gauss = Noise(np.full(2, 0.04), np.full(2, 0.6), "position")
     g = ref_claim.draw_noise(rng, gauss, 20000)
     assert g.std() == pytest.approx(0.2, rel=0.05) and np.abs(g).max() > 0.6
+
+
+def test_a_reference_that_cannot_be_refitted_borrows_the_best_refit():
+    from nnik.machine.reference import fit_reference, known_noise
+
+    rng = np.random.default_rng(4)
+    p = rng.uniform(0, 100, (120, 2))
+
+    def truth(pm):
+        return np.stack([3 * pm[:, 0] + 0.002 * pm[:, 1] ** 2, pm[:, 0] - 2 * pm[:, 1] + 0.3 * np.sin(pm[:, 0] / 9)], 1)
+    q = np.rint(truth(p))
+    noise = known_noise(q, np.eye(2), reading_step=1.0)
+    held = rng.uniform(0, 100, (40, 2))
+    ref = fit_reference(p, q, noise, extra={"mlp": (truth, truth(held) - np.rint(truth(held)))}, gp=False)
+    assert ref.name == "mlp"  # the outside model scored best (it is the truth)
+    assert "(for mlp)" in ref.fields.method and ref.fields.fields.shape[0] == ref_claim.BOOT
+    assert 0 < ref.error_max < 1.0
