@@ -99,3 +99,37 @@ def gcode(base_mm: np.ndarray, fs: float, every: int, origin_mm: np.ndarray, hea
     lines.append("M400")
     src.append(-1)
     return lines, src
+
+
+def least_squares(target: np.ndarray, fine_dt: float, dt: float, f_hz, zeta, smooth: float = 1e-2) -> np.ndarray:
+    """The base on a grid of step dt (a whole number of fine_dt), linearly interpolated in
+    between (as a controller that updates every dt), whose modelled tip best follows target
+    (N, 2) sampled every fine_dt, in least squares, with a small penalty on the base's second
+    differences (smooth x their squares, mm^2).  The tip is linear in the grid's values, so
+    this is one linear solve per axis: the seed's optimisation without iterations.  The model is
+    time-invariant, so every interior hat's response is one response shifted."""
+    from nnik.dynamics.axis import tip as tip_of
+
+    k = int(round(dt / fine_dt))
+    if k < 1 or abs(k * fine_dt - dt) > 1e-9 * dt:
+        raise ValueError(f"the grid step {dt} s must be a whole number of {fine_dt} s")
+    n_fine = len(target)
+    m = (n_fine - 1) // k + 2
+    t_fine = np.arange(n_fine) * fine_dt
+    grid = np.arange(m) * dt
+    out = np.zeros((m, target.shape[1]))
+    for i in range(target.shape[1]):
+        first = tip_of(np.interp(t_fine, grid, np.eye(1, m, 0)[0]), fine_dt, f_hz[i], zeta[i])
+        hat = np.interp(t_fine, grid[:3] , [0.0, 1.0, 0.0], right=0.0)  # the hat at grid[1]
+        resp = tip_of(hat, fine_dt, f_hz[i], zeta[i])  # from rest at 0
+        cols = np.zeros((n_fine, m))
+        cols[:, 0] = first
+        for j in range(1, m):
+            sh = (j - 1) * k
+            if sh < n_fine:
+                cols[sh:, j] = resp[:n_fine - sh]
+        d2 = np.diff(np.eye(m), 2, axis=0) * math.sqrt(smooth)
+        a_ = np.vstack([cols, d2])
+        b_ = np.concatenate([target[:, i], np.zeros(len(d2))])
+        out[:, i] = np.linalg.lstsq(a_, b_, rcond=None)[0]
+    return out

@@ -51,11 +51,14 @@ def event_index(planned_mm: np.ndarray, corner_deg: float = CORNER_DEG) -> np.nd
 
 
 def ringing(dev_um: np.ndarray, tick_hz: float, at_s: np.ndarray, window_s=WINDOW_S) -> dict:
-    """Peak of dev_um (per tick) within window_s after each event time: the max over events,
-    their mean and how many were seen."""
+    """Peak of dev_um (per tick) within window_s after each event time, the window ending early
+    where the next event begins (its own transient is not this one's ringing): the max over
+    events, their mean and how many were seen."""
     peaks = []
-    for t in at_s:
-        lo, hi = int(round((t + window_s[0]) * tick_hz)), int(round((t + window_s[1]) * tick_hz))
+    at_s = np.sort(np.asarray(at_s, float))
+    for i, t in enumerate(at_s):
+        end = min(t + window_s[1], at_s[i + 1]) if i + 1 < len(at_s) else t + window_s[1]
+        lo, hi = int(round((t + window_s[0]) * tick_hz)), int(round(end * tick_hz))
         seg = dev_um[lo:min(hi, len(dev_um))]
         if len(seg):
             peaks.append(float(seg.max()))
