@@ -10,8 +10,9 @@ int16 intermediates round at about 2^-15 of it).
   sums stay int32.
 * C: ``codegen/templates/poly32_ik.c.j2``: on avr-gcc the 32 x 32 -> 64 product column by
   column on the hardware multiplier (16 MUL in one asm block), the byte pick and the last
-  0..7-bit shift of each call inlined; elsewhere (host, SDCC pic16, which has no 64-bit type)
-  four 16 x 16 -> 32 partial products in two 32-bit halves, shifts bytewise under SDCC.
+  0..7-bit shift of each call inlined; SDCC pic16 (no 64-bit type): 16 MULWF in one __asm
+  block on a work area, shifts bytewise; the host: four 16 x 16 -> 32 partial products in two
+  32-bit halves.
 * Cost: calls of the product routine (steps and output terms) and the shifts by fewer than 32
   bits, a linear model calibrated on simavr / gpsim (``nnik/calibration/poly32.json``,
   ``python -m nnik.implementations.poly.calibrate --wide``).
