@@ -67,14 +67,45 @@ class ErrorFields:
 
     def claim(self, p_mm: np.ndarray, d: np.ndarray) -> float:
         """The LEVEL quantile over replicates of max |d + e*_b| over the points (worst output);
-        ``d`` (N, 2) is the implementation's error against the reference there."""
+        ``d`` (N, 2) is the implementation's error against the reference there. Exact, with
+        few points evaluated per replicate (10^6 check points: about a second)."""
         d = np.asarray(d, dtype=np.float64).reshape(-1, 2)
         a = np.abs(d)
         # only points within 2 emax of the largest |d| can hold a replicate's max
         keep = np.any(a >= a.max(0) - 2 * self.emax, axis=1)
         p, d = np.asarray(p_mm, dtype=np.float64).reshape(-1, 2)[keep], d[keep]
         cells = self._cells(p)
-        m = [float(np.abs(d + self.at(b, p, cells)).max()) for b in range(len(self.fields))]
+        # exact, but few points evaluated: within a grid cell a replicate's field is one bilinear
+        # patch, bounded by its corners; each replicate is evaluated where d peaks either way in
+        # each cell, then at every point of the cells whose bound (d's extreme + the corners')
+        # could still beat that
+        gx = self.fields.shape[2]
+        cell = cells[0][:, 1] * gx + cells[0][:, 0]
+        order = np.argsort(cell, kind="stable")
+        cs, ds, ps = cell[order], d[order], p[order]
+        c0, c1 = cells[0][order], cells[1][order]
+        new = np.r_[True, cs[1:] != cs[:-1]]
+        seg = np.cumsum(new) - 1
+        starts = np.flatnonzero(new)
+        counts = np.diff(np.r_[starts, len(cs)])
+        dmax, dmin = np.maximum.reduceat(ds, starts, axis=0), np.minimum.reduceat(ds, starts, axis=0)
+        peak = np.flatnonzero(np.any((ds >= dmax[seg]) | (ds <= dmin[seg]), axis=1))
+        cx, cy = cs[starts] % gx, cs[starts] // gx
+
+        def worst(b, idx):
+            return float(np.abs(ds[idx] + self.at(b, ps[idx], (c0[idx], c1[idx]))).max())
+        m = []
+        for b in range(len(self.fields)):
+            low = worst(b, peak)
+            f = self.fields[b]
+            corners = np.stack([f[cy, cx], f[cy, cx + 1], f[cy + 1, cx], f[cy + 1, cx + 1]])
+            bound = np.maximum(dmax + corners.max(0), -(dmin + corners.min(0))).max(1)
+            cand = np.flatnonzero(bound > low)
+            if len(cand):  # every point of those cells
+                lens = counts[cand]
+                idx = np.arange(lens.sum()) - np.repeat(np.cumsum(lens) - lens, lens) + np.repeat(starts[cand], lens)
+                low = max(low, worst(b, idx))
+            m.append(low)
         return float(np.quantile(m, LEVEL))
 
     def floors(self) -> np.ndarray:

@@ -68,6 +68,7 @@ def suggest(trial, problem: Problem, families: list[str]) -> tuple[str, dict]:
         p[f"{fam_}_fit"] = trial.suggest_categorical(f"{fam_}_fit", ["lsq", "minimax"])
     p["lut_bits"] = trial.suggest_categorical("lut_bits", [16, 32])
     p["hybrid_coef_bits"] = trial.suggest_categorical("hybrid_coef_bits", [8, 16])
+    p["poly_width"] = trial.suggest_categorical("poly_width", [16, 32])  # last: the draws above keep their order
     return fam, config_of(fam, p, problem)
 
 
@@ -77,6 +78,9 @@ def config_of(fam: str, p: dict, problem: Problem) -> dict:
         hidden = [p["mlp_w1"]] + ([p["mlp_w2"]] if p["mlp_depth"] == 2 else [])
         return {"hidden": hidden, "mode": p["mlp_mode"], "kernel": "fast", "tanh": p["mlp_tanh"],
                 "weight_bits": p["mlp_weight_bits"]}
+    if fam == "poly" and p.get("poly_width") == 32:  # the wide path: its own knobs are fixed
+        return {"degree": p["poly_degree"], "fit": "best", "coef_bits": 32, "split": False, "trim": 4,
+                "rounding": True, "lsb": False, "width": 32}
     if fam == "poly":
         return {"degree": p["poly_degree"], "fit": "best", "coef_bits": p["poly_coef_bits"],
                 "split": SPLITS[p["poly_split"]], "trim": 4, "rounding": p["poly_rounding"], "lsb": p["poly_lsb"]}
@@ -106,12 +110,14 @@ def params_of(fam: str, config: dict) -> dict | None:
             return None
         return {"family": fam, "mlp_depth": len(h), "mlp_w1": h[0], **({"mlp_w2": h[1]} if len(h) == 2 else {}),
                 "mlp_mode": config["mode"], "mlp_tanh": config["tanh"], "mlp_weight_bits": config["weight_bits"]}
+    if fam == "poly" and config.get("width", 16) == 32:
+        return {"family": fam, "poly_degree": config["degree"], "poly_width": 32}
     if fam == "poly":
         split = next((k for k, v in SPLITS.items() if v == config["split"]), None)
         if split is None or config.get("fit", "best") != "best" or config["coef_bits"] not in (16, 32):
             return None
         return {"family": fam, "poly_degree": config["degree"], "poly_coef_bits": config["coef_bits"],
-                "poly_split": split, "poly_lsb": config["lsb"], "poly_rounding": config["rounding"]}
+                "poly_split": split, "poly_lsb": config["lsb"], "poly_rounding": config["rounding"], "poly_width": 16}
     k = [int(v) for v in config["k"]]
     out = {"family": fam, f"{fam}_kx": k[0], f"{fam}_ky": k[1], f"{fam}_W": config["W"], f"{fam}_fit": config["fit"]}
     out.update({"lut_bits": config["bits"]} if fam == "lut" else {"hybrid_coef_bits": config["coef_bits"]})

@@ -82,3 +82,15 @@ def test_a_reference_that_cannot_be_refitted_borrows_the_best_refit():
     assert ref.name == "mlp"  # the outside model scored best (it is the truth)
     assert "(for mlp)" in ref.fields.method and ref.fields.fields.shape[0] == ref_claim.BOOT
     assert 0 < ref.error_max < 1.0
+
+
+def test_the_claim_equals_the_brute_force_over_every_point():
+    rng = np.random.default_rng(5)
+    g = 17
+    f = rng.normal(0, 0.1, (12, g, g, 2)).astype(np.float32)
+    ef = ref_claim.ErrorFields(np.zeros(2), np.full(2, 10.0), f, np.ones((g, g), bool), "test")
+    p = rng.uniform(0, 10, (30000, 2))
+    d = 0.05 * np.sin(p[:, :1] * 3 + np.array([0.0, 1.0])) + rng.normal(0, 0.01, (30000, 2))
+    cells = ef._cells(p)
+    brute = [float(np.abs(d + ef.at(b, p, cells)).max()) for b in range(12)]
+    assert ef.claim(p, d) == pytest.approx(float(np.quantile(brute, ref_claim.LEVEL)))
