@@ -29,12 +29,15 @@ test: setup toolchains
 # validation sweep (predicted vs measured cycles and flash on 11 architectures x 2 tanh); the measured
 # machines' claimed accuracy against a known truth (nnik.bench.measured), and
 # 300 random G-code jobs per machine on the simulated Uno against the Python model (CI runs 10),
-# 30 random galvos and 20 random belt frames through the ladders, 12 random measured frames' claims
+# 30 random galvos and 20 random belt frames through the ladders, 12 random measured frames' claims,
+# and the G-code firmware's planner and input shaper on the simulated Uno (job time, step rate,
+# sample loop CPU %, flash and SRAM; nnik.bench.motion)
 bench: setup toolchains
 	$(PYTHON) -m nnik.bench.mlp $(SCENARIO)
 	$(PYTHON) -m nnik.bench.families
 	$(PYTHON) -m nnik.bench.measured --sweep 8
 	$(PYTHON) -m nnik.bench.search
+	$(PYTHON) -m nnik.bench.motion
 	$(PYTHON) -m nnik.estimate sweep
 	$(PYTHON) -m nnik.estimate sweep --kernel fast --tanh '' --arch 4 --arch 6 --arch 8 --arch 10 --arch 12 --arch 16
 	NNIK_HYPOTHESIS_EXAMPLES=300 $(PYTHON) -m pytest -q tests/firmware/gcode/test_gcode_hypothesis.py

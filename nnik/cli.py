@@ -352,7 +352,8 @@ def cmd_job(args) -> None:
     from nnik.files.pick_state import require_deliverable
 
     require_deliverable(out, "job")  # the job runs the firmware: only the verified pick, never the MLP instead
-    res = run_job(out, Path(args.job), seg_um=args.seg_um, use_chip=False if args.no_chip else None)
+    res = run_job(out, Path(args.job), seg_um=args.seg_um, use_chip=False if args.no_chip else None,
+                  shaper=args.shaper)
     t = Table(title=f"G-code job {res['job']} on {res['scenario']} ({res['seconds']:.2f} s of motion)")
     t.add_column("item")
     t.add_column("result")
@@ -458,7 +459,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("job", help="G-code file")
     p.add_argument("-o", "--outdir", help="model directory of the scenario TOML (default build/<name>/); "
                    "an error with a model directory as the first argument")
-    p.add_argument("--seg-um", type=int, help="longest segment in um (default 500)")
+    p.add_argument("--seg-um", type=int, help="longest arc chord in um (default 500)")
+    p.add_argument("--shaper", metavar="KIND",
+                   help="input shaper on the chip: none, zv, mzv, zvd, ei (default: the scenario's [motion] shaper)")
     p.add_argument("--no-chip", action="store_true", help="Python model only, no simavr run")
     p.set_defaults(func=cmd_job)
     return ap

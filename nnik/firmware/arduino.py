@@ -23,7 +23,7 @@ from nnik.emit.c_text import c_comment_safe
 from nnik.firmware.ik_oracle import ik_oracle, ik_sources, load_scenario_of, picked_implementation
 
 ARDUINO = CODEGEN / "arduino"
-ENGINE_FILES = ("nnik_gcode.h", "nnik_gcode.c")
+ENGINE_FILES = ("nnik_gcode.h", "nnik_gcode.c", "nnik_plan.h", "nnik_plan.c", "nnik_shaper.h", "nnik_shaper.c")
 VERSION = "0.1.0"
 N_GOLDEN = 64
 
@@ -75,7 +75,8 @@ def export_arduino(outdir: Path, libdir: Path, machine: MachineConfig | None = N
                description=c_comment_safe(scn.raw.get("description") or name), unit=scn.unit, outputs=scn.outputs, model_hash=hash_,
                origin=list(machine.origin_um), seg_um=machine.seg_um, tick_hz=machine.tick_hz, homepage=homepage(),
                rapid_um_min=machine.rapid_um_min, feed_um_min=machine.feed_um_min, rows=rows, n=len(rows),
-               tool=machine.tool, tool_defines=machine.defines())
+               tool=machine.tool, tool_defines=machine.defines(), sample_hz=machine.sample_hz,
+               shaper=machine.shaper)
     env = _env()
     files = {
         libdir / "library.properties": "library.properties.j2",

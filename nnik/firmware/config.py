@@ -1,11 +1,20 @@
 """The G-code firmware's machine settings (what nnik_gcode_config.h fixes), shared by the
-Arduino export and the Python model of the firmware."""
+Arduino export and the Python model of the firmware.
+
+Motion (issue 18): per-axis acceleration (um/s^2), junction deviation (um), max feed (um/min:
+it caps F and is the G0 speed), the sample rate of the planned trajectory (it must divide the
+tick rate) and the input shaper (kind and, per axis, Q15 amplitudes summing to 32768 at delays
+in whole samples, from nnik.dynamics.shapers). The firmware's integer forms are properties:
+acc_q16 (um/sample^2 * 65536, floor), vn_max_q16 (um/sample * 65536 at max feed, floor)."""
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 
 TOOLS = ("laser", "pen", "servo")
+SHAPER_KINDS = ("none", "zv", "mzv", "zvd", "ei")
+SHAPER_RAM_BUDGET = 512  # bytes of SRAM the shaper's buffers may take on the ATmega328
+MIN_FEED_UM_MIN = 1000
 SERVO_MIN_US, SERVO_MAX_US = 544, 2400  # 0 and 180 degrees, as Arduino's Servo library
 SERVO_US_PER_COUNT = 64  # Timer2 at 16 MHz / 1024: 61 Hz, 64 us per count
 
@@ -18,9 +27,9 @@ class MachineConfig:
     length, tick rate, rapid and default feed (um/min)."""
 
     origin_um: tuple[int, int]
-    seg_um: int = 500
+    seg_um: int = 500  # longest arc chord
     tick_hz: int = 10_000
-    rapid_um_min: int = 3_000_000
+    max_feed_um_min: int = 3_000_000  # caps F; G0 and G28 move at it
     feed_um_min: int = 600_000
     # the tool on D11 (OC2A, Timer2; grbl's spindle PWM pin): "laser" (M3/M4/M5 with S; duty =
     # S * 255 / s_max, grbl's $30), "pen" (Z > pen_z_um: D11 low, pen up; else high, down) or
@@ -30,6 +39,40 @@ class MachineConfig:
     pen_z_um: int = 0
     servo_up_deg: int = 90
     servo_down_deg: int = 30
+    accel_um_s2: tuple[int, int] = (1_000_000, 1_000_000)
+    junction_dev_um: int = 10
+    sample_hz: int = 1000
+    shaper: str = "none"
+    # per axis (amplitudes Q15, delays in samples); empty with shaper "none"
+    shaper_taps: tuple = ()
+    plan_blocks: int = 8  # the planner's lookahead queue
+
+    @property
+    def rapid_um_min(self) -> int:
+        return self.max_feed_um_min
+
+    @property
+    def acc_q16(self) -> tuple[int, int]:
+        return tuple(int(a) * 65536 // (self.sample_hz * self.sample_hz) for a in self.accel_um_s2)
+
+    @property
+    def vn_max_q16(self) -> int:
+        return self.max_feed_um_min * 65536 // (60 * self.sample_hz)
+
+    @property
+    def sample_ticks(self) -> int:
+        return self.tick_hz // self.sample_hz
+
+    @property
+    def shaper_len(self) -> int:
+        """The shaper's memory in samples per axis (its longest delay); 0 without a shaper."""
+        return max((max(d) for _, d in self.shaper_taps), default=0)
+
+    @property
+    def shaper_ram_bytes(self) -> int:
+        """SRAM of the shaper's buffers: int16 increments and int16 window sums per axis."""
+        n = max((len(a) for a, _ in self.shaper_taps), default=0)
+        return 2 * 2 * self.shaper_len + 2 * 2 * n + 1 if self.shaper_len else 0
 
     def __post_init__(self):
         if not 100 <= self.seg_um <= 5000:
@@ -42,6 +85,44 @@ class MachineConfig:
             raise ValueError("s_max must be 1..9999")
         if not (0 <= self.servo_up_deg <= 180 and 0 <= self.servo_down_deg <= 180):
             raise ValueError("servo angles must be 0..180 degrees")
+        self._check_motion()
+
+    def _check_motion(self) -> None:
+        if not (self.sample_hz >= 100 and self.tick_hz % self.sample_hz == 0):
+            raise ValueError(f"sample rate {self.sample_hz} Hz must be >= 100 Hz and divide the {self.tick_hz} Hz tick rate")
+        if len(self.accel_um_s2) != 2 or any(a <= 0 for a in self.accel_um_s2):
+            raise ValueError("acceleration must be > 0 on both axes")
+        if any(not 16 <= q < 1 << 22 for q in self.acc_q16):
+            lo, hi = (16 * self.sample_hz**2 + 65535) // 65536, ((1 << 22) - 1) * self.sample_hz**2 // 65536
+            raise ValueError(f"acceleration must be {lo / 1000:g}..{hi // 1000} mm/s^2 at {self.sample_hz} Hz samples")
+        if not 1 <= self.junction_dev_um <= 1000:
+            raise ValueError("junction deviation must be 0.001..1 mm")
+        if not MIN_FEED_UM_MIN <= self.max_feed_um_min or self.vn_max_q16 >= 1 << 23:
+            top = ((1 << 23) - 1) * 60 * self.sample_hz // 65536 // 1000
+            raise ValueError(f"max feed must be 1..{top} mm/min at {self.sample_hz} Hz samples")
+        if self.shaper not in SHAPER_KINDS:
+            raise ValueError(f"shaper must be one of {', '.join(SHAPER_KINDS)}")
+        if (self.shaper == "none") != (not self.shaper_taps):
+            raise ValueError("shaper taps are needed with a shaper, and none without")
+        if self.shaper_taps:
+            self._check_taps()
+        if not 2 <= self.plan_blocks <= 64:
+            raise ValueError("planner queue must be 2..64 blocks")
+
+    def _check_taps(self) -> None:
+        if len(self.shaper_taps) != 2:
+            raise ValueError("shaper taps: one (amplitudes, delays) per axis")
+        for amps, delays in self.shaper_taps:
+            if len(amps) != len(delays) or not 1 <= len(amps) <= 8 or sum(amps) != 32768 or min(amps) < 0:
+                raise ValueError("shaper amplitudes must be 1..8 Q15 taps summing to 32768")
+            if min(delays) < 0 or max(delays) > 255:
+                raise ValueError("shaper delays must be 0..255 samples")
+        vmax_um = self.vn_max_q16 // 65536 + 2
+        if self.shaper_len * vmax_um >= 1 << 15:
+            raise ValueError("shaper too long for the max feed: its window sums would overflow int16")
+        if self.shaper_ram_bytes > SHAPER_RAM_BUDGET:
+            raise ValueError(f"shaper needs {self.shaper_ram_bytes} B of SRAM (> {SHAPER_RAM_BUDGET} B): "
+                             f"its longest delay, {self.shaper_len} samples, is too long; raise f or lower sample_hz")
 
     def pen_duty(self, down: bool) -> int:
         """OCR2A of the pen up or down (pen: 0 / 255; servo: the pulse in 64 us counts)."""
@@ -56,7 +137,24 @@ class MachineConfig:
         return 0 if self.tool == "laser" else self.pen_duty(False)
 
     def defines(self) -> dict[str, str]:
-        """The tool's macros of nnik_gcode_config.h (its #ifndef defaults are this class's)."""
+        """The macros of nnik_gcode_config.h: the tool's and the motion's (its #ifndef defaults
+        are this class's; a build may pass them as -D)."""
+        return {**self.tool_defines(), **self.motion_defines()}
+
+    def motion_defines(self) -> dict[str, str]:
+        ax, ay = self.acc_q16
+        out = {"NNIK_GC_SAMPLE_HZ": f"{self.sample_hz}UL", "NNIK_GC_ACC_X": f"{ax}UL", "NNIK_GC_ACC_Y": f"{ay}UL",
+               "NNIK_GC_JDEV_UM": f"{self.junction_dev_um}UL", "NNIK_GC_MAX_FEED_UM_MIN": f"{self.max_feed_um_min}L",
+               "NNIK_PL_N": str(self.plan_blocks), "NNIK_SH_LEN": str(self.shaper_len)}
+        if self.shaper_taps:
+            n = max(len(a) for a, _ in self.shaper_taps)
+            pad = [(list(a) + [0] * (n - len(a)), list(d) + [0] * (n - len(d))) for a, d in self.shaper_taps]
+            out["NNIK_SH_N"] = str(n)
+            out["NNIK_SH_AMPS"] = "{" + ",".join("{" + ",".join(map(str, a)) + "}" for a, _ in pad) + "}"
+            out["NNIK_SH_DELAYS"] = "{" + ",".join("{" + ",".join(map(str, d)) + "}" for _, d in pad) + "}"
+        return out
+
+    def tool_defines(self) -> dict[str, str]:
         pen = self.tool != "laser"
         return {"NNIK_GC_TOOL": "1" if pen else "0", "NNIK_GC_S_MAX": f"{self.s_max}L",
                 "NNIK_GC_PEN_Z_UM": f"{self.pen_z_um}L",
@@ -65,10 +163,36 @@ class MachineConfig:
                 "NNIK_GC_TOOL_CS": "7" if self.tool == "servo" else "4"}
 
 
-def default_machine(scn) -> MachineConfig:
-    """Program (0, 0) at the centre of the workspace, 0.5 mm segments, 10 kHz ticks, and the
-    scenario's [tool] (a laser by default)."""
+def default_machine(scn, shaper: str | None = None) -> MachineConfig:
+    """Program (0, 0) at the centre of the workspace, 0.5 mm arc chords, 10 kHz ticks, the
+    scenario's [tool] (a laser by default) and [motion] / [dynamics] (the shaper designed for the
+    [dynamics] resonance per axis; shaper overrides [motion] shaper). ValueError: one line."""
     lo, hi = domain_um(scn.workspace)
     tool = dict(getattr(scn, "tool", None) or {})
     kind = tool.pop("kind", "laser")
-    return MachineConfig(origin_um=tuple(int(v) for v in (lo + hi) // 2), tool=kind, **tool)
+    mo = dict(getattr(scn, "motion", None) or {})
+    dyn = getattr(scn, "dynamics", None)
+    sample_hz = int(mo.get("sample_hz", 1000))
+    sh = shaper or mo.get("shaper", "none")
+    if sh == "auto":
+        raise ValueError("shaper 'auto' is not available yet (it picks by contour error: the lead's part of issue 18)")
+    taps = () if sh == "none" else shaper_taps(sh, dyn, sample_hz)
+    um = lambda key, default, k=1000.0: int(round(float(mo.get(key, default)) * k))  # noqa: E731
+    return MachineConfig(origin_um=tuple(int(v) for v in (lo + hi) // 2), tool=kind,
+                         accel_um_s2=(um("accel_x_mm_s2", 1000.0), um("accel_y_mm_s2", 1000.0)),
+                         junction_dev_um=um("junction_deviation_mm", 0.01), max_feed_um_min=um("max_feed_mm_min", 3000.0),
+                         sample_hz=sample_hz, shaper=sh, shaper_taps=taps, **tool)
+
+
+def shaper_taps(kind: str, dynamics: dict | None, sample_hz: int) -> tuple:
+    """Per axis (Q15 amplitudes, delays in samples) of the shaper kind for the [dynamics]
+    resonance (nnik.dynamics.shapers.design, then quantize)."""
+    from nnik.dynamics.shapers import design, quantize
+
+    if not dynamics:
+        raise ValueError(f"shaper {kind!r} needs a [dynamics] table (f_hz, zeta)")
+    out = []
+    for f, z in zip(dynamics["f_hz"], dynamics["zeta"]):
+        amps, delays = quantize(design(kind, float(f), float(z)), sample_hz)
+        out.append((tuple(int(a) for a in amps), tuple(int(d) for d in delays)))
+    return tuple(out)

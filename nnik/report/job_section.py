@@ -29,7 +29,8 @@ def job_section_png(outdir: Path) -> list[dict]:
         items.append({"png": png, "row": row, "caption": (
             f"G-code job {res['job']}: {res['segments']} segments, {res['steps']} steps; contour error max / RMS "
             f"{cap['contour max / RMS (µm)']} µm (IK {cap['IK max (µm)']}, chord {cap['chord max (µm)']} µm); "
-            f"simulated Uno: {cap['chip steps']} steps, {cap['segments/s at 50 % CPU']} segments/s at 50 % CPU")})
+            f"simulated Uno: {cap['chip steps']} steps, sample loop {cap['sample loop CPU']} of the CPU; job time "
+            f"{cap['job time (s)']} s ({cap['planner / shaper']})")})
     return items
 
 

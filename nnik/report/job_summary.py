@@ -3,8 +3,9 @@
 from __future__ import annotations
 
 JOB_HEADER = ("scenario", "job", "segments", "steps", "contour max / RMS (µm)", "IK max (µm)", "rounding max (µm)",
-              "chord max (µm)", "chip steps", "cycles/segment", "segments/s at 50 % CPU", "flash / RAM (B)",
-              "tool on / travel (mm)", "tool on-time (s)", "chip tool changes")
+              "chord max (µm)", "chip steps", "cycles/sample", "sample loop CPU", "flash / RAM (B)",
+              "tool on / travel (mm)", "tool on-time (s)", "chip tool changes", "job time (s)",
+              "peak step rate / limit (Hz)", "planner / shaper")
 
 
 def _um(s: dict | None, rms: bool = False) -> str:
@@ -21,11 +22,16 @@ def job_row(r: dict) -> tuple[str, ...]:
         chip = (f"not run ({c['not_run']})", "-", "-", "-", "-")
     else:
         same = "equal" if c["steps_equal"] and c["replies_equal"] else "DIFFER"
-        cps = c.get("cycles_per_segment")
-        rate = c.get("segment_rate_hz")
+        cps = c.get("cycles_per_sample")
+        cpu = c.get("cpu_sample_loop")
         chip = (f"{c['steps']} {same}", f"{cps['mean']:.0f} (longest stretch {cps['max']})" if cps else "-",
-                f"{rate['mean']:.0f}" if rate else "-",
+                f"{100 * cpu:.1f} %" if cpu is not None else "-",
                 f"{c['flash_bytes']} / {c['ram_bytes']}",
                 f"{c['tool_changes']} {'equal' if c['tool_equal'] else 'DIFFER'}" if "tool_equal" in c else "-")
+    m = r.get("motion") or {}
+    motion = (f"{m['job_s']:.3f}", f"{m['peak_step_rate_hz']:.0f} / {m['step_rate_limit_hz']}"
+              + (f" ({m['overspeed_samples']} samples stretched)" if m["overspeed_samples"] else ""),
+              f"{m['accel_mm_s2'][0]:g}/{m['accel_mm_s2'][1]:g} mm/s², {m['sample_hz']} Hz, {m['shaper']}"
+              + (f" ({m['shaper_ram_bytes']} B)" if m["shaper_ram_bytes"] else "")) if m else ("-", "-", "-")
     return (r["scenario"], r["job"], str(r["segments"]), str(r["steps"]), _um(r["contour_um"], True), _um(r["ik_um"]),
-            _um(r.get("rounding_um")), _um(r.get("chord_um")), *chip[:4], *tool, chip[4])
+            _um(r.get("rounding_um")), _um(r.get("chord_um")), *chip[:4], *tool, chip[4], *motion)

@@ -12,7 +12,7 @@ from nnik.report.document import Fig, Section, Table, txt
 
 PNG_PREFIX = "job_"
 NUMERIC = {"segments", "steps", "contour max / RMS (µm)", "IK max (µm)", "rounding max (µm)", "chord max (µm)",
-           "cycles/segment", "segments/s at 50 % CPU", "flash / RAM (B)"}
+           "cycles/sample", "sample loop CPU", "flash / RAM (B)"}
 
 
 def build(ctx) -> Section:

@@ -1,8 +1,8 @@
 /*
- * nnik_gcode.c - see nnik_gcode.h.  Every rounding here is spelled out because nnik.gcode
- * (Python) repeats it bit for bit: numbers are parsed to whole micrometres with round half
- * away from zero, line points are start + floor(d * k / n), arc midpoints are rounded half
- * away from zero, square roots are floors.
+ * nnik_gcode.c - see nnik_gcode.h.  Every rounding here is spelled out because
+ * nnik.firmware.gcode (Python) repeats it bit for bit: numbers are parsed to whole micrometres
+ * with round half away from zero, arc midpoints are rounded half away from zero, square roots
+ * are floors; the planner (nnik_plan.c) and the shaper (nnik_shaper.c) state theirs.
  */
 #include "nnik_gcode.h"
 #include "nnik_gcode_config.h"
@@ -24,7 +24,10 @@
 #define POS_LIMIT 268435455L /* 2^28 - 1 um: arc sums stay in int32, products in int64 */
 #define MIN_FEED 1000L       /* um per minute */
 #define ARC_STACK 32
-#define TICKS_PER_UM_MIN (60UL * NNIK_GC_TICK_HZ)
+#define SAMPLE_TICKS (NNIK_GC_TICK_HZ / NNIK_GC_SAMPLE_HZ) /* stepper ticks per sample */
+#if NNIK_GC_TICK_HZ % NNIK_GC_SAMPLE_HZ
+#error "NNIK_GC_SAMPLE_HZ must divide NNIK_GC_TICK_HZ"
+#endif
 #define TOOL_SCALED 0x100 /* a tool word: duty | TOOL_SCALED (M4: duty * the segment's speed / feed) */
 #define S_FULL (NNIK_GC_S_MAX * 1000L) /* S at full power, in thousandths */
 
@@ -137,7 +140,15 @@ void nnik_gc_init(nnik_gc_t *g, nnik_gc_emit_fn emit)
     g->feed = NNIK_GC_FEED_UM_MIN;
     g->line_no = 0;
     g->segments = 0;
+    g->blocks = 0;
+    g->samples = 0;
+    g->overspeed = 0;
+    g->settle = 0;
+    g->tail_tool = 0;
     g->clamped = 0;
+    g->pt[0] = g->pt[1] = 0;
+    nnik_pl_init(&g->pl, g->pt);
+    nnik_sh_init(&g->sh, g->pt);
     g->motion = 0;
     g->spindle = 0;
     g->s = 0;
@@ -159,81 +170,78 @@ int8_t nnik_gc_too_long(nnik_gc_t *g)
 /* ---------------------------------------------------------------- motion */
 static int32_t iabs32(int32_t v) { return v < 0 ? -v : v; }
 
-/* One segment from g->pos to (x, y): IK at the end, steps and ticks to emit(). */
-static void seg_to(nnik_gc_t *g, int32_t x, int32_t y, int32_t feed)
+/* One stepper segment per sample: shape the planned point, IK, steps from the last sample, and
+ * the sample's ticks (stretched to the larger step count if the motors would need more than one
+ * step per tick: an overspeed, counted).  M4: the duty scales by the sample's planned speed over
+ * its block's nominal speed. */
+static void out_sample(nnik_gc_t *g, const int32_t p[2], uint16_t tool, uint32_t v, uint32_t vn)
 {
-    int32_t in[2], out[2], d[2], dx, dy;
-    uint32_t len, ticks, tt, a;
-    dx = x - g->pos[0];
-    dy = y - g->pos[1];
-    len = nnik_isqrt32((uint32_t)(dx * dx) + (uint32_t)(dy * dy));
-    in[0] = NNIK_GC_ORIGIN_X_UM + g->off[0] + x;
-    in[1] = NNIK_GC_ORIGIN_Y_UM + g->off[1] + y;
+    int32_t in[2], out[2], d[2];
+    uint32_t ticks = SAMPLE_TICKS, a;
+    nnik_sh_step(&g->sh, p, g->pt);
+    in[0] = NNIK_GC_ORIGIN_X_UM + g->pt[0];
+    in[1] = NNIK_GC_ORIGIN_Y_UM + g->pt[1];
     if (NNIK_GC_IK(in, out))
         g->clamped++;
     d[0] = out[0] - g->steps[0];
     d[1] = out[1] - g->steps[1];
-    tt = ticks = (len * TICKS_PER_UM_MIN + (uint32_t)feed - 1) / (uint32_t)feed;
     a = (uint32_t)iabs32(d[0]);
     if (ticks < a)
         ticks = a;
     a = (uint32_t)iabs32(d[1]);
     if (ticks < a)
         ticks = a;
-    if (ticks == 0)
-        ticks = 1;
-    g->duty = (uint8_t)g->tool;
-    if (g->tool & TOOL_SCALED) /* M4: the power follows the segment's speed (tt / ticks <= 1) */
-        g->duty = (uint8_t)((uint32_t)(uint8_t)g->tool * tt / ticks);
-    g->last_tool = g->tool;
-    g->pos[0] = x;
-    g->pos[1] = y;
+    if (ticks != SAMPLE_TICKS)
+        g->overspeed++;
+    g->duty = (uint8_t)tool;
+    if (tool & TOOL_SCALED) /* M4: the power follows the planned speed */
+        g->duty = (uint8_t)((uint32_t)(uint8_t)tool * (v < vn ? v : vn) / vn);
     g->steps[0] = out[0];
     g->steps[1] = out[1];
     g->segments++;
     g->emit(g, d, ticks);
 }
 
-/* floor division and remainder (0 <= r < n), n > 0 */
-static int32_t floordiv(int32_t a, int32_t n, int32_t *r)
+static void sample(nnik_gc_t *g)
 {
-    int32_t q = a / n, m = a % n;
-    if (m < 0) {
-        q -= 1;
-        m += n;
+    nnik_pl_sample_t s;
+    nnik_pl_sample(&g->pl, &s);
+    g->settle = NNIK_SH_LEN;
+    g->tail_tool = s.tool;
+    g->samples++;
+    out_sample(g, s.p, s.tool, s.v, s.vn);
+}
+
+void nnik_gc_flush(nnik_gc_t *g)
+{
+    int32_t p[2];
+    while (nnik_pl_ready(&g->pl, 1))
+        sample(g);
+    p[0] = g->pl.start[0]; /* at rest at the last block's end: the shaper's tail holds it */
+    p[1] = g->pl.start[1];
+    while (g->settle) {
+        g->settle--;
+        out_sample(g, p, g->tail_tool, 0, 1);
     }
-    *r = m;
-    return q;
+}
+
+/* A block from g->pos to (x, y), once the planner has room (sampling the head block if full). */
+static void seg_to(nnik_gc_t *g, int32_t x, int32_t y, int32_t feed)
+{
+    while (nnik_pl_ready(&g->pl, 0))
+        sample(g);
+    nnik_pl_push(&g->pl, g->off[0] + x, g->off[1] + y, feed, g->tool);
+    g->last_tool = g->tool;
+    g->pos[0] = x;
+    g->pos[1] = y;
+    g->blocks++;
 }
 
 static void line_to(nnik_gc_t *g, int32_t x, int32_t y, int32_t feed)
 {
-    int32_t x0 = g->pos[0], y0 = g->pos[1], dx = x - x0, dy = y - y0;
-    int32_t n, k, qx, qy, rx, ry, ax = 0, ay = 0, px = x0, py = y0;
-    uint32_t len;
-    if (dx == 0 && dy == 0)
+    if (x == g->pos[0] && y == g->pos[1])
         return;
-    len = nnik_isqrt64((uint64_t)((int64_t)dx * dx) + (uint64_t)((int64_t)dy * dy));
-    n = (int32_t)((len + NNIK_GC_SEG_UM - 1) / NNIK_GC_SEG_UM);
-    if (n < 1)
-        n = 1;
-    qx = floordiv(dx, n, &rx);
-    qy = floordiv(dy, n, &ry);
-    for (k = 1; k <= n; k++) { /* p_k = p0 + floor(d * k / n) */
-        px += qx;
-        ax += rx;
-        if (ax >= n) {
-            ax -= n;
-            px += 1;
-        }
-        py += qy;
-        ay += ry;
-        if (ay >= n) {
-            ay -= n;
-            py += 1;
-        }
-        seg_to(g, px, py, feed);
-    }
+    seg_to(g, x, y, feed);
 }
 
 /* round(a / b) half away from zero, b > 0 */
@@ -422,10 +430,12 @@ static uint32_t dwell_ticks(uint32_t ms)
     return ms / 1000 * NNIK_GC_TICK_HZ + ms % 1000 * NNIK_GC_TICK_HZ / 1000;
 }
 
-/* a segment without steps: ticks of the stepper at rest with the tool word t (fixed) */
+/* a segment without steps: ticks of the stepper at rest with the tool word t (fixed), after the
+ * planned motion has come to rest (a stop block) */
 static void rest(nnik_gc_t *g, uint32_t ticks, uint16_t t)
 {
     int32_t d[2] = {0, 0};
+    nnik_gc_flush(g);
     g->tool = g->last_tool = t;
     g->duty = (uint8_t)t;
     g->segments++;
@@ -492,7 +502,7 @@ int8_t nnik_gc_line(nnik_gc_t *g, const char *line)
     uint8_t i = 0, in_comment = 0, wait = 0, motion = 0xff, inch = g->inch, rel = g->relative, x = 0;
     uint8_t nonmodal = 0; /* 4, 28, 92 */
     uint8_t spindle = 0xff;  /* M3, M4, M5 */
-    uint32_t seg0 = g->segments;
+    uint32_t blk0 = g->blocks;
     num_t w[W_COUNT];
     int32_t tgt[2], feed, tz;
     char c;
@@ -679,11 +689,11 @@ int8_t nnik_gc_line(nnik_gc_t *g, const char *line)
                 rest(g, t, idle_tool(g));
         } else if (nonmodal == 28) { /* via X Y (if given), then home: where the motors started */
             g->tool = move_tool(g, 1);
-            line_to(g, tgt[0], tgt[1], NNIK_GC_RAPID_UM_MIN);
+            line_to(g, tgt[0], tgt[1], NNIK_GC_MAX_FEED_UM_MIN);
             for (i = 0; i < 2; i++)
                 if (w[i].have || !xy)
                     tgt[i] = -g->off[i];
-            line_to(g, tgt[0], tgt[1], NNIK_GC_RAPID_UM_MIN);
+            line_to(g, tgt[0], tgt[1], NNIK_GC_MAX_FEED_UM_MIN);
         }
     } else {
         uint8_t axes = w[W_X].have || w[W_Y].have || w[W_I].have || w[W_J].have || w[W_R].have;
@@ -731,7 +741,7 @@ int8_t nnik_gc_line(nnik_gc_t *g, const char *line)
         tool_state(g, &w[W_S], spindle, tz);
         if (axes) {
             g->tool = move_tool(g, motion == 0);
-            int32_t f = motion == 0 ? (int32_t)NNIK_GC_RAPID_UM_MIN : feed;
+            int32_t f = motion == 0 ? (int32_t)NNIK_GC_MAX_FEED_UM_MIN : feed;
             if (motion >= 2)
                 arc_to(g, c2, tgt, r, motion == 3 ? 1 : -1, f);
             else
@@ -746,8 +756,10 @@ int8_t nnik_gc_line(nnik_gc_t *g, const char *line)
     /* a tool word that turns a laser off (M5, S0, M2/M30) or moves the pen, and no segment on
      * this line: the tool changes on the next tick, by a one-tick segment without steps, if the
      * last segment left it otherwise (a new power alone waits for the next cut) */
-    if ((spindle != 0xff || w[W_S].have || w[W_Z].have || (wait & 2)) && g->segments == seg0 &&
+    if ((spindle != 0xff || w[W_S].have || w[W_Z].have || (wait & 2)) && g->blocks == blk0 &&
         g->last_tool != idle_tool(g) && (NNIK_GC_TOOL == 1 || move_tool(g, 0) == 0))
         rest(g, 1, idle_tool(g));
+    if (wait & 1) /* M400, M2, M30: the planner runs out to rest */
+        nnik_gc_flush(g);
     return (int8_t)(wait & 1);
 }

@@ -14,12 +14,15 @@
  * G17 G40 G49 G54 G64 G80 G94 (the only modes there are: accepted, nothing to do).
  * Comments: (...) and ';'.  '*nn' ends a line: the XOR of every byte before the '*' (Marlin).
  *
- * Motion: a line is cut into ceil(L / NNIK_GC_SEG_UM) equal segments; an arc into quarter
- * turns and those by bisection until every chord is <= NNIK_GC_SEG_UM.  At each segment end the
- * engine calls the IK on the machine position (program position + the work origin), and hands
- * the steps from the previous end and a duration in ticks of NNIK_GC_TICK_HZ to emit():
- *     ticks = max(ceil(chord_um * 60 * TICK_HZ / feed_um_per_min), |d0|, |d1|, 1)
- * (G0 moves at NNIK_GC_RAPID_UM_MIN).
+ * Motion: a line is one planner block; an arc is cut into quarter turns and those by bisection
+ * until every chord is <= NNIK_GC_SEG_UM, each chord a block (nnik_plan.h: lookahead, junction
+ * deviation, trapezoidal speed).  The planner's fixed-rate samples (NNIK_GC_SAMPLE_HZ) pass the
+ * input shaper (nnik_shaper.h); the engine calls the IK on every shaped sample (plus the work
+ * origin) and hands the steps from the previous sample to emit() with the sample's ticks,
+ * NNIK_GC_TICK_HZ / NNIK_GC_SAMPLE_HZ (more if a motor needs more steps than that: an
+ * overspeed, counted).  G0 moves at NNIK_GC_MAX_FEED_UM_MIN, which also caps F.  M400, M2, M30,
+ * G4 and a tool change without motion flush the planner (it stops at the last block's end) and
+ * then run the shaper's tail (NNIK_SH_LEN samples at rest) before a dwell or tool segment.
  *
  * Configuration comes from nnik_gcode_config.h (written by `nnik export --arduino`).
  */
@@ -27,6 +30,9 @@
 #define NNIK_GCODE_H
 
 #include <stdint.h>
+
+#include "nnik_plan.h"
+#include "nnik_shaper.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -43,7 +49,15 @@ struct nnik_gc {
     int32_t steps[2];    /* actuator command at pos */
     int32_t feed;        /* um per minute */
     uint32_t line_no;    /* lines seen (1 = the first) */
-    uint32_t segments;   /* segments emitted */
+    uint32_t segments;   /* segments emitted (samples and rests) */
+    uint32_t blocks;     /* blocks handed to the planner */
+    uint32_t samples;    /* planner samples */
+    uint32_t overspeed;  /* samples stretched beyond their ticks: a motor needed more steps */
+    uint16_t settle;     /* shaper tail samples still owed after the last planner sample */
+    uint16_t tail_tool;  /* the tool word of the last planner sample */
+    int32_t pt[2];       /* the last shaped point, um (machine less the work origin) */
+    nnik_plan_t pl;
+    nnik_shaper_t sh;
     uint32_t clamped;    /* segment ends the IK clamped to its domain */
     int32_t s;           /* S in thousandths (laser power; NNIK_GC_S_MAX = full) */
     int32_t z;           /* Z, um (pen machines: above NNIK_GC_PEN_Z_UM the pen is up) */
@@ -67,6 +81,9 @@ int8_t nnik_gc_line(nnik_gc_t *g, const char *line);
 
 /* Count a line that did not fit the caller's buffer: always -1, "line too long". */
 int8_t nnik_gc_too_long(nnik_gc_t *g);
+
+/* The planner runs out to rest and the shaper's tail follows (the end of a job: M400 does it). */
+void nnik_gc_flush(nnik_gc_t *g);
 
 /* floor(sqrt(v)) */
 uint32_t nnik_isqrt32(uint32_t v);

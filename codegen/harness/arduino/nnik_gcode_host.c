@@ -1,7 +1,8 @@
 /*
  * nnik_gcode_host - the G-code engine (codegen/arduino/src/nnik_gcode.c) with a model's IK,
  * compiled for the host: G-code lines on stdin, on stdout one "S d0 d1 ticks x y duty" per segment
- * (steps, ticks, the tool's duty last, end point in um: the program position plus the G92 offset) and one "R <answer>" per line ("ok" or
+ * (steps, ticks, the shaped point in um: machine less the work origin, the tool's duty last; one per
+ * planner sample, shaper tail sample or rest) and one "R <answer>" per line ("ok" or
  * "error: line N: ...", as the sketch answers).  nnik's tests compare it with the Python model.
  */
 #include <stdio.h>
@@ -12,7 +13,7 @@
 static void emit(nnik_gc_t *g, const int32_t d[2], uint32_t ticks)
 {
     printf("S %ld %ld %lu %ld %ld %u\n", (long)d[0], (long)d[1], (unsigned long)ticks,
-           (long)(g->pos[0] + g->off[0]), (long)(g->pos[1] + g->off[1]), (unsigned)g->duty);
+           (long)g->pt[0], (long)g->pt[1], (unsigned)g->duty);
 }
 
 int main(void)
@@ -32,5 +33,7 @@ int main(void)
         else
             printf("R ok\n");
     }
+    nnik_gc_flush(&gc); /* the end of the job, as the simavr harness's final M400 */
+    printf("O %lu\n", (unsigned long)gc.overspeed);
     return 0;
 }

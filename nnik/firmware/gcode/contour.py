@@ -2,10 +2,10 @@
 
 Reached positions are the exact forward kinematics of the step counts after every stepper tick
 that moved a motor. The error splits into:
-  * IK error: at each segment end, the delivered IK command's position vs the path (the
-    model's error plus the rounding to whole actuator units);
+  * IK error: at each sample, the delivered IK command's position vs the path (the model's
+    error plus the rounding to whole actuator units; with a shaper also its corner smoothing);
   * rounding: the same for the exact IK rounded half up (what any IK on these motors keeps);
-  * chord (segmentation) error: the exact IK at consecutive segment ends, joined by a straight
+  * chord (segmentation) error: the exact IK at consecutive samples, joined by a straight
     line in joint space (what the DDA does), mapped through the exact forward kinematics.
 Distances are to the move itself or its neighbours (corners), in micrometres.
 """
@@ -67,12 +67,11 @@ def path_dist_um(p_mm: np.ndarray, move_idx: np.ndarray, moves: list[Move], orig
 
 
 def segment_moves(plan: Plan) -> np.ndarray:
-    """Move index of every segment; a dwell (G4) belongs to the move before it (the first move
-    if it comes before any)."""
-    idx = np.full(len(plan.ends), -1, np.int64)
-    for m, mv in enumerate(plan.moves):
-        idx[mv.first_seg:mv.first_seg + mv.n_seg] = m
-    return np.maximum(np.maximum.accumulate(idx) if len(idx) else idx, 0)
+    """Move index of every stepper segment (plan_steps sets it: a sample's block's move; a rest
+    or the shaper's tail belongs to the move before, the first move if none)."""
+    if plan.seg_move is None:
+        raise ValueError("segment_moves needs plan_steps to have run on the plan")
+    return plan.seg_move
 
 
 def units_to_mm(scn, units: np.ndarray) -> np.ndarray:

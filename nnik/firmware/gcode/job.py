@@ -2,8 +2,10 @@
 
 The Python model gives every step (segment, tick, motor, direction) and the contour error;
 the chip (the library's NAME_gcode sketch built with the Arduino AVR core, on simavr) must emit
-the same steps, and its measured cycles per segment give the segment rate it sustains at
-<= 50 % CPU. Results: OUTDIR/job/<job>.json and <job>.png.
+the same steps. Reported: the job's time (planned with acceleration), the peak step rate against
+the one-step-per-tick limit (and the samples that had to be stretched beyond it), and on the
+chip the sample loop's share of the CPU (the busy pin's high time over the motion's time), its
+cycles per sample, flash and SRAM. Results: OUTDIR/job/<job>.json and <job>.png.
 """
 
 from __future__ import annotations
@@ -24,7 +26,6 @@ from nnik.firmware.gcode.parse import split_lines
 from nnik.firmware.gcode.plot import job_png
 from nnik.firmware.gcode.steps import chip_events, chip_tool_events, model_events, model_tool_events
 
-CPU_SHARE = 0.5  # of the chip for segment preparation; the rest steps, talks and waits
 CLOCK_HZ = 16_000_000
 
 
@@ -58,8 +59,9 @@ def job_machine(lines: list[str], cfg: MachineConfig, source: str) -> MachineCon
 def tool_report(seg, cfg: MachineConfig) -> dict:
     """Tool-on (laser on, pen down) and travel length and the tool's on-time, from the segments."""
     on = seg.duty != cfg.tool_off_duty
-    return {"kind": cfg.tool, "on_mm": float(seg.chord[on].sum() / 1000.0),
-            "travel_mm": float(seg.chord[~on].sum() / 1000.0), "on_s": float(seg.ticks[on].sum() / cfg.tick_hz),
+    step = np.hypot(*np.diff(np.vstack([[0, 0], seg.ends_um]), axis=0).T)  # each segment's shaped motion, um
+    return {"kind": cfg.tool, "on_mm": float(step[on].sum() / 1000.0),
+            "travel_mm": float(step[~on].sum() / 1000.0), "on_s": float(seg.ticks[on].sum() / cfg.tick_hz),
             "changes": int(len(model_tool_events(seg)))}
 
 
@@ -104,6 +106,21 @@ def chip_run(outdir: Path, lines: list[str], cfg: MachineConfig, seconds: float,
             "segments_started": int(len(run.marks)), "end_cycle": run.end_cycle, **motion_times(run)}
 
 
+def cpu_report(run, busy: np.ndarray, samples: int) -> dict:
+    """The sample loop's share of the CPU: the busy pin (high while the sketch parses, plans,
+    samples, shapes, runs the IK and queues; low while it waits for queue room or input) over the
+    motion's time, from the first segment to the machine's last tick; and busy cycles per sample."""
+    first = int(run.marks[0]) if len(run.marks) else 0
+    end = run.idle_cycle or run.end_cycle
+    lo, hi = np.maximum(run.busy[:, 0], first), np.minimum(run.busy[:, 1], end)
+    inside = float(np.maximum(hi - lo, 0).sum())
+    out = {"cycles_per_sample": {"mean": float(busy.sum()) / max(samples, 1), "max": int(busy.max()),
+                                 "windows": int(len(busy))}}
+    if end > first:
+        out["cpu_sample_loop"] = inside / (end - first)
+    return out
+
+
 def motion_times(run) -> dict:
     """When the chip's motion ended (its last tick: the machine fell idle after the whole job) and
     how long it ran from the first segment's first tick, in seconds of simulated time (None: no
@@ -127,21 +144,47 @@ def write_step_counts(path: Path, steps: np.ndarray, start: np.ndarray) -> Path:
     return path
 
 
-def run_job(outdir: Path, job_path: Path, seg_um: int | None = None, use_chip: bool | None = None) -> dict:
-    """Run a job; use_chip None: on the simulated chip when the toolchain is there."""
+def motion_report(seg, cfg: MachineConfig) -> dict:
+    """The job's time, its peak step rate against the stepper's limit (one step per tick per
+    motor), the samples stretched beyond their ticks, and the settings behind them."""
+    samp = seg.kind == 0
+    rate = np.abs(seg.delta).max(1)[samp] * cfg.tick_hz / np.maximum(seg.ticks[samp], 1) if samp.any() else np.zeros(1)
+    return {"job_s": float(seg.ticks.sum() / cfg.tick_hz), "samples": int(samp.sum()),
+            "peak_step_rate_hz": float(rate.max()), "step_rate_limit_hz": cfg.tick_hz,
+            "overspeed_samples": seg.overspeed, "peak_speed_mm_s": float(seg.speed_um_s.max() / 1000.0) if samp.any() else 0.0,
+            "sample_hz": cfg.sample_hz, "accel_mm_s2": [a / 1000.0 for a in cfg.accel_um_s2],
+            "junction_deviation_mm": cfg.junction_dev_um / 1000.0, "max_feed_mm_min": cfg.max_feed_um_min / 1000.0,
+            "shaper": cfg.shaper, "shaper_taps": [list(map(list, t)) for t in cfg.shaper_taps],
+            "shaper_ram_bytes": cfg.shaper_ram_bytes, "plan_blocks": cfg.plan_blocks}
+
+
+def machine_for(scn, shaper: str | None, seg_um: int | None) -> MachineConfig:
+    """default_machine(scn) with the command line's --shaper and --seg-um; bad values: one line."""
+    from dataclasses import replace
+
     from nnik.firmware.config import default_machine
-    from nnik.firmware.gcode import chip
 
-    outdir, job_path = Path(outdir), Path(job_path)
-    scn = load_scenario_of(outdir)
-    cfg = default_machine(scn)
+    try:
+        cfg = default_machine(scn, shaper)
+    except ValueError as exc:
+        raise NnikError(str(exc), None, "--shaper" if shaper else "[motion]") from None
     if seg_um is not None:
-        from dataclasses import replace
-
         try:
             cfg = replace(cfg, seg_um=seg_um)
         except ValueError as exc:
             raise NnikError(str(exc), None, "--seg-um") from None
+    return cfg
+
+
+def run_job(outdir: Path, job_path: Path, seg_um: int | None = None, use_chip: bool | None = None,
+            shaper: str | None = None) -> dict:
+    """Run a job; use_chip None: on the simulated chip when the toolchain is there; shaper:
+    none|zv|mzv|zvd|ei overrides the scenario's [motion] shaper."""
+    from nnik.firmware.gcode import chip
+
+    outdir, job_path = Path(outdir), Path(job_path)
+    scn = load_scenario_of(outdir)
+    cfg = machine_for(scn, shaper, seg_um)
     lines = read_job(job_path)
     cfg = job_machine(lines, cfg, str(job_path))
     # a long job shows its stage on a terminal (nothing in a log: nnik.progress)
@@ -151,8 +194,10 @@ def run_job(outdir: Path, job_path: Path, seg_um: int | None = None, use_chip: b
     stages.update(1)
     res = {"scenario": scn.name, "job": job_path.name, "unit": scn.unit,
            "machine": {"origin_um": list(cfg.origin_um), "seg_um": cfg.seg_um, "tick_hz": cfg.tick_hz,
+                       "sample_hz": cfg.sample_hz, "shaper": cfg.shaper,
                        "tool": cfg.tool, "tool_defines": cfg.defines()},
-           "tool": tool_report(seg, cfg), **contour_report(scn, cfg, plan, seg, events)}
+           "tool": tool_report(seg, cfg), "motion": motion_report(seg, cfg),
+           **contour_report(scn, cfg, plan, seg, events)}
     plot = res.pop("plot")
     why = chip.tool_missing_reason()
     if use_chip is False or (use_chip is None and why):
@@ -173,18 +218,14 @@ def run_job(outdir: Path, job_path: Path, seg_um: int | None = None, use_chip: b
                   "tool_changes": int(len(tev)),
                   "tool_equal": tev.shape == want_tev.shape and bool((tev == want_tev).all())})
         if len(busy) and res["segments"]:
-            # the sketch's busy pin is high while it parses, segments and runs the IK (interrupts
-            # that fall inside included), low while it waits: busy cycles per segment, amortised,
-            # and the longest stretch between two waits (one segment, with its line's parsing)
-            mean = float(busy.sum()) / res["segments"]
-            c["cycles_per_segment"] = {"mean": mean, "max": int(busy.max()), "windows": int(len(busy))}
-            c["segment_rate_hz"] = {"mean": CPU_SHARE * CLOCK_HZ / mean}
+            c.update(cpu_report(run, busy, res["motion"]["samples"]))
         res["chip"] = c
     stages.update(1)
     stages.set_postfix_str("plot")
     out = outdir / JOB_DIR
     out.mkdir(parents=True, exist_ok=True)
-    title = (f"{scn.name}: {job_path.name}, {res['segments']} segments of <= {cfg.seg_um} µm; contour error max "
+    title = (f"{scn.name}: {job_path.name}, {res['motion']['job_s']:.2f} s ({cfg.sample_hz} Hz samples, shaper "
+             f"{cfg.shaper}); contour error max "
              f"{res['contour_um']['max']:.1f} µm, RMS {res['contour_um']['rms']:.1f} µm")
     res["png"] = str(job_png(out / f"{job_path.stem}.png", title, plan, cfg, plot, seg))
     (out / f"{job_path.stem}.json").write_text(json.dumps(res, indent=2) + "\n")

@@ -1,7 +1,12 @@
 """The G-code firmware's motion logic in Python, bit for bit with codegen/arduino/src/nnik_gcode.c.
 
-Lines become segment ends (program micrometres); the IK runs on all ends at once (it does not
-feed back into the geometry); then each segment's steps and duration in ticks follow.
+The interpreter turns lines into planner operations: a block per line or arc chord (machine
+micrometres less the work origin), a flush (M400, M2, M30 and the end of the job) and rests
+(G4, a tool change without motion: the planner first runs out to rest). planner.run_ops plays
+them through the planner, the fixed-rate sampler and the shaper as the chip does; the IK then
+runs on all shaped samples at once (it does not feed back into the motion), and each sample
+becomes a stepper segment of tick_hz / sample_hz ticks (more if a motor needs more steps: an
+overspeed), each rest a segment without steps.
 """
 
 from __future__ import annotations
@@ -28,8 +33,8 @@ class Move:
     kind: str  # "line" | "arc"
     start: tuple[int, int]
     end: tuple[int, int]
-    first_seg: int  # index of its first segment
-    n_seg: int
+    first_seg: int  # index of its first planner block (push)
+    n_seg: int  # its blocks
     center: tuple[int, int] | None = None
     radius: int = 0
     ccw: bool = True
@@ -38,15 +43,16 @@ class Move:
 
 @dataclass
 class Plan:
-    """Segment ends of a whole job, before the IK."""
+    """A whole job as planner operations, before the planner and the IK."""
 
-    ends: list[tuple[int, int]] = field(default_factory=list)  # program um
-    chord: list[int] = field(default_factory=list)  # floor length of each segment, um
-    feed: list[int] = field(default_factory=list)  # um/min used for its ticks
-    dwell: list[int] = field(default_factory=list)  # G4 or a tool change: its ticks (no steps); 0: a move
-    tool: list[int] = field(default_factory=list)  # the tool word of each segment
+    ends: list[tuple[int, int]] = field(default_factory=list)  # block ends, um (machine less the origin)
+    feed: list[int] = field(default_factory=list)  # um/min of each block
+    tool: list[int] = field(default_factory=list)  # the tool word of each block
+    dwell: list[int] = field(default_factory=list)  # ticks of each rest (G4, or 1: a tool change)
+    ops: list[tuple] = field(default_factory=list)  # ("push", x, y, feed, tool, i), ("flush",), ("rest", ticks, tool)
     moves: list[Move] = field(default_factory=list)
     replies: list[str] = field(default_factory=list)  # "ok" or "error: line N: ..."
+    seg_move: np.ndarray | None = None  # set by plan_steps: the move of every stepper segment
 
 
 def _floordiv(a: int, n: int) -> tuple[int, int]:
@@ -99,24 +105,21 @@ class Interpreter:
         self.line_no = 0
         self.plan = Plan()
 
-    # ---- segments ------------------------------------------------------------------------
+    # ---- blocks ---------------------------------------------------------------------------
     def _seg_to(self, x: int, y: int, feed: int) -> None:
-        dx, dy = x - self.pos[0], y - self.pos[1]
-        self.plan.ends.append((x + self.off[0], y + self.off[1]))
-        self.plan.chord.append(isqrt(dx * dx + dy * dy))
+        end = (x + self.off[0], y + self.off[1])
+        self.plan.ops.append(("push", end[0], end[1], feed, self.tool, len(self.plan.ends)))
+        self.plan.ends.append(end)
         self.plan.feed.append(feed)
-        self.plan.dwell.append(0)
         self.plan.tool.append(self.tool)
         self.last_tool = self.tool
         self.pos = (x, y)
 
     def _rest(self, ticks: int, tool: int) -> None:
-        """A segment without steps (a dwell, a tool change) with a fixed tool word."""
-        self.plan.ends.append((self.pos[0] + self.off[0], self.pos[1] + self.off[1]))
-        self.plan.chord.append(0)
-        self.plan.feed.append(self.feed)
+        """A segment without steps (a dwell, a tool change) with a fixed tool word, once the
+        planned motion is at rest."""
+        self.plan.ops.append(("rest", ticks, tool))
         self.plan.dwell.append(ticks)
-        self.plan.tool.append(tool)
         self.tool = self.last_tool = tool
 
     def _dwell(self, ms: int) -> None:
@@ -163,14 +166,8 @@ class Interpreter:
                                         None if c is None else sh(c), r, motion == 3, motion == 0))
 
     def _line_to(self, x: int, y: int, feed: int) -> None:
-        x0, y0 = self.pos
-        dx, dy = x - x0, y - y0
-        if dx == 0 and dy == 0:
-            return
-        length = isqrt(dx * dx + dy * dy)
-        n = max(1, (length + self.cfg.seg_um - 1) // self.cfg.seg_um)
-        for k in range(1, n + 1):
-            self._seg_to(x0 + (dx * k) // n, y0 + (dy * k) // n, feed)
+        if (x, y) != self.pos:
+            self._seg_to(x, y, feed)  # one block: the planner samples it
 
     def _arc_piece(self, c, cur, end, r, feed):
         seg2 = self.cfg.seg_um**2
@@ -265,6 +262,8 @@ class Interpreter:
         if (toolword and len(self.plan.ends) == seg0 and self.last_tool != self.idle_tool()
                 and (self.cfg.tool != "laser" or self.move_tool(False) == 0)):
             self._rest(1, self.idle_tool())
+        if w.wait:  # M400, M2, M30: the planner runs out to rest
+            self.plan.ops.append(("flush",))
 
     def _nonmodal(self, w, nm: int, tgt: list[int], inch: bool, rel: bool, feed: int, z: int) -> None:
         v = w.values
@@ -326,35 +325,72 @@ class Interpreter:
 
 @dataclass
 class Segments:
-    """The firmware's output for a job: per segment, the steps and ticks it hands the stepper."""
+    """The firmware's output for a job: per stepper segment (a sample or a rest), the steps and
+    ticks it hands the stepper, and the sample stream behind them."""
 
-    ends_um: np.ndarray  # (S, 2) program um
+    ends_um: np.ndarray  # (S, 2) the shaped point after each segment, um (machine less the origin)
     steps: np.ndarray  # (S + 1, 2) actuator command at the start and after each segment
     delta: np.ndarray  # (S, 2)
     ticks: np.ndarray  # (S,)
-    clamped: np.ndarray  # (S,) 1 where the IK clamped the end to its domain
+    clamped: np.ndarray  # (S,) 1 where the IK clamped the point to its domain
     duty: np.ndarray | None = None  # (S,) the tool's duty (OCR2A, 0..255) during each segment
-    chord: np.ndarray | None = None  # (S,) floor length of each segment, um
+    chord: np.ndarray | None = None  # (S,) floor length of each segment's shaped motion, um
+    kind: np.ndarray | None = None  # (S,) 0: a sample, 1: a rest (G4, tool change)
+    planned_um: np.ndarray | None = None  # (S, 2) the planner's point before the shaper
+    speed_q16: np.ndarray | None = None  # (S,) planned speed, Q16 um/sample (0 at rest)
+    move: np.ndarray | None = None  # (S,) the move of each segment (rests: the move before)
+    sample_hz: int = 1000
+
+    @property
+    def overspeed(self) -> int:
+        """Samples whose steps needed more ticks than a sample has."""
+        return int(((self.kind == 0) & (self.ticks > self.ticks_per_sample)).sum())
+
+    @property
+    def ticks_per_sample(self) -> int:
+        return int(self.ticks[self.kind == 0].min()) if (self.kind == 0).any() else 0
+
+    @property
+    def speed_um_s(self) -> np.ndarray:
+        return self.speed_q16 * self.sample_hz / 65536.0
+
+
+def _move_of_blocks(plan: Plan) -> np.ndarray:
+    idx = np.full(len(plan.ends), -1, np.int64)
+    for m, mv in enumerate(plan.moves):
+        idx[mv.first_seg:mv.first_seg + mv.n_seg] = m
+    return idx
 
 
 def plan_steps(plan: Plan, cfg: MachineConfig, ik) -> Segments:
     """Steps and ticks of every segment: ik(in_um (N, 2) int64) -> (out (N, 2), flags (N,))."""
+    from nnik.firmware.gcode.planner import duty_of, run_ops
+
+    st = run_ops(plan.ops, cfg)
     origin = np.asarray(cfg.origin_um, dtype=np.int64)
-    ends = np.asarray(plan.ends, dtype=np.int64).reshape(-1, 2)
-    out, flags = ik(np.concatenate([origin[None, :], ends + origin]))
-    out = np.asarray(out, dtype=np.int64)
-    delta = np.diff(out, axis=0)
-    chord = np.asarray(plan.chord, dtype=np.int64)
-    feed = np.asarray(plan.feed, dtype=np.int64)
-    ticks = (chord * 60 * cfg.tick_hz + feed - 1) // feed
-    tt = ticks
-    ticks = np.maximum.reduce([ticks, np.abs(delta[:, 0]), np.abs(delta[:, 1]), np.ones_like(ticks)])
-    dwell = np.asarray(plan.dwell, dtype=np.int64)
-    ticks = np.where(dwell > 0, dwell, ticks)
-    tool = np.asarray(plan.tool, dtype=np.int64)
-    base = tool & 0xFF
-    duty = np.where(tool & TOOL_SCALED, base * tt // ticks, base)  # M4: duty * speed / feed
-    return Segments(ends, out, delta, ticks, np.asarray(flags, dtype=np.int64)[1:], duty, chord)
+    kind = np.asarray(st.kind, dtype=np.int64)
+    shaped = np.asarray(st.shaped, dtype=np.int64).reshape(-1, 2)
+    samp = kind == 0
+    out, flags = ik(np.concatenate([origin[None, :], shaped[samp] + origin]))
+    out, flags = np.asarray(out, dtype=np.int64), np.asarray(flags, dtype=np.int64)
+    k = np.cumsum(samp)  # samples up to and including each segment
+    steps = np.concatenate([out[:1], out[k]])
+    delta = np.diff(steps, axis=0)
+    T = cfg.sample_ticks
+    ticks = np.where(samp, np.maximum.reduce([np.full(len(kind), T), np.abs(delta[:, 0]), np.abs(delta[:, 1])]),
+                     np.asarray(st.rest_ticks, dtype=np.int64))
+    clamped = np.where(samp, flags[k], 0)
+    prev = np.concatenate([np.zeros((1, 2), np.int64), shaped[:-1]])
+    dd = shaped - prev
+    chord = np.array([isqrt(int(a * a + b * b)) for a, b in dd.tolist()], dtype=np.int64)
+    bm = _move_of_blocks(plan)
+    blk = np.asarray(st.block, dtype=np.int64)
+    move = np.where(blk >= 0, bm[np.maximum(blk, 0)] if len(bm) else -1, -1)
+    move = np.maximum(np.maximum.accumulate(move) if len(move) else move, 0)
+    plan.seg_move = move
+    return Segments(shaped, steps, delta, ticks, clamped, duty_of(st), chord, kind,
+                    np.asarray(st.planned, dtype=np.int64).reshape(-1, 2), np.asarray(st.speed, dtype=np.int64),
+                    move, cfg.sample_hz)
 
 
 def interpret(lines: list[str], cfg: MachineConfig) -> Plan:

@@ -75,6 +75,26 @@ def firmware(galvo_run, corexy_run, tmp_path_factory):
     return out
 
 
+@pytest.fixture(scope="session")
+def zvd_firmware(firmware, tmp_path_factory):
+    """Per scenario: the G-code firmware with ZVD input shaping for 40 Hz, zeta 0.1 on both axes
+    (entries as in firmware)."""
+    from dataclasses import replace
+
+    from nnik.firmware.config import shaper_taps
+
+    out = {}
+    for name, (run, lib, _, ik, _) in firmware.items():
+        cfg = lib["machine"]
+        cfg = replace(cfg, shaper="zvd", shaper_taps=shaper_taps("zvd", {"f_hz": (40.0, 40.0), "zeta": (0.1, 0.1)},
+                                                                   cfg.sample_hz))
+        work = tmp_path_factory.mktemp(f"{name}_zvd")
+        lib2 = export_arduino(run, work / "lib", cfg)
+        fw = chip.build_sketch(work / "lib", f"{name}_gcode", work / "build", cfg.defines())
+        out[name] = (run, lib2, fw, ik, work / "build")
+    return out
+
+
 def run_both(entry, lines: list[str]):
     """The lines through the Python model and the simulated chip: (plan, segments, chip run), with
     the chip's answers, segments and every step checked against the model's, and the run's end

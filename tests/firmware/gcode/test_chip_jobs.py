@@ -19,7 +19,8 @@ STAR_ARCS = ["G21 G90 F6000", "G0 X0 Y5", "G1 X2.939 Y-4.045", "X-4.755 Y1.545",
 @pytest.mark.parametrize("scenario", MACHINES)
 def test_one_line_without_m400_runs_all_its_segments(firmware, scenario):
     plan, seg, res = run_both(firmware[scenario], ["G1 X2 F3000"])
-    assert len(res.marks) == len(seg.ticks) == 4  # 2 mm in 0.5 mm segments
+    assert len(plan.ends) == 1 and len(res.marks) == len(seg.ticks) > 20  # one block, a segment per 1 ms sample
+    assert tuple(seg.planned_um[-1]) == (2000, 0) and seg.speed_q16[-1] > 0  # it ends on X2 (at rest after it)
 
 
 @pytest.mark.parametrize("scenario", MACHINES)

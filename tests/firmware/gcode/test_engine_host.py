@@ -1,5 +1,6 @@
-"""nnik_gcode.c on the host with the real generated IK equals the Python model, segment for
-segment and answer for answer, on the shipped jobs and on random lines (good and bad)."""
+"""nnik_gcode.c (with nnik_plan.c and nnik_shaper.c) on the host with the real generated IK equals
+the Python model, segment for segment and answer for answer, on the shipped jobs and on random
+lines (good and bad), with and without each input shaper."""
 
 from __future__ import annotations
 
@@ -59,6 +60,7 @@ def compare(outdir, lib, info, lines, cfg=None):
     want = (np.column_stack([seg.delta, seg.ticks, seg.ends_um, seg.duty]) if len(seg.ticks)
             else np.zeros((0, 6), np.int64))
     assert np.array_equal(host["segments"], want)
+    assert host["overspeed"] == seg.overspeed
     return plan
 
 
@@ -181,3 +183,59 @@ def test_tool_output_equal_on_the_host(corexy_lib, tool):
     else:
         assert duties == {cfg.pen_duty(True), cfg.pen_duty(False)}
     assert sum(plan.dwell) > 0 and sum(1 for d in plan.dwell if d == 1) > 3  # tool changes at rest
+
+
+SHAPERS = ("none", "zv", "mzv", "zvd", "ei")
+
+
+def shaped_cfg(cfg, kind: str, f_hz=(40.0, 33.0), zeta=(0.1, 0.07)):
+    from dataclasses import replace
+
+    from nnik.firmware.config import shaper_taps
+
+    if kind == "none":
+        return replace(cfg, shaper="none", shaper_taps=())
+    return replace(cfg, shaper=kind, shaper_taps=shaper_taps(kind, {"f_hz": f_hz, "zeta": zeta}, cfg.sample_hz))
+
+
+@pytest.mark.parametrize("kind", SHAPERS)
+@pytest.mark.parametrize("job", ["l_path.gcode", "circle.gcode", "star.gcode", "lasergrbl_raster.gcode"])
+def test_shipped_jobs_with_each_shaper(corexy_lib, kind, job):
+    outdir, lib, info = corexy_lib
+    from nnik.firmware.gcode.job import job_machine
+
+    lines = split_lines((JOBS / job).read_bytes())
+    cfg = shaped_cfg(job_machine(lines, info["machine"], job), kind)
+    plan = compare(outdir, lib, info, lines, cfg)
+    assert all(r == "ok" for r in plan.replies)
+
+
+EXAMPLES = int(__import__("os").environ.get("NNIK_HYPOTHESIS_EXAMPLES", "10"))
+
+
+@pytest.mark.parametrize("kind", SHAPERS)
+def test_random_jobs_with_each_shaper_and_planner_setting(corexy_lib, kind):
+    """hypothesis draws grbl-dialect jobs (the chip test's strategy) and planner settings (per-axis
+    acceleration, junction deviation, max feed, sample rate, queue length); the host C equals the
+    model bit for bit."""
+    from dataclasses import replace
+
+    from hypothesis import HealthCheck, given, note, settings
+    from hypothesis import strategies as st
+
+    from tests.firmware.gcode.test_gcode_hypothesis import jobs
+
+    outdir, lib, info = corexy_lib
+
+    @settings(max_examples=EXAMPLES, deadline=None, database=None, suppress_health_check=list(HealthCheck))
+    @given(lines=jobs(), ax=st.integers(100, 15000), ay=st.integers(100, 15000), jd=st.integers(1, 200),
+           feed=st.integers(600, 9000), hz=st.sampled_from([500, 1000, 2000]), n=st.integers(2, 16))
+    def check(lines, ax, ay, jd, feed, hz, n):
+        feed = min(feed, ((1 << 23) - 1) * 60 * hz // 65536 // 1000)  # speeds below 128 um per sample
+        cfg = replace(info["machine"], accel_um_s2=(ax * 1000, ay * 1000), junction_dev_um=jd,
+                      max_feed_um_min=feed * 1000, sample_hz=hz, plan_blocks=n, shaper="none", shaper_taps=())
+        cfg = shaped_cfg(cfg, kind, f_hz=(40.0, 33.0) if hz >= 1000 else (40.0, 50.0))
+        note("\n".join(lines))
+        compare(outdir, lib, info, lines, cfg)
+
+    check()

@@ -22,14 +22,11 @@ def ends(lines, cfg=CFG):
     return plan, np.asarray(plan.ends)
 
 
-def test_line_is_cut_into_equal_segments_ending_exactly():
-    plan, e = ends(["G1 X10 Y3.3 F600"])
-    L = isqrt(10000**2 + 3300**2)
-    assert len(e) == ceil(L / 500)
-    assert tuple(e[-1]) == (10000, 3300)
-    steps = np.diff(np.vstack([[0, 0], e]), axis=0)
-    assert np.all(np.hypot(*steps.T) <= 501)
-    assert plan.feed == [600000] * len(e)
+def test_a_line_is_one_planner_block_ending_exactly():
+    plan, e = ends(["G1 X10 Y3.3 F600", "G1 X10 Y3.3", "G0 X0 Y0"])
+    assert e.tolist() == [[10000, 3300], [0, 0]]  # the line to where it stands adds nothing
+    assert plan.feed == [600000, CFG.max_feed_um_min]
+    assert [op[0] for op in plan.ops] == ["push", "push"]  # the job's end flushes in plan_steps
 
 
 def test_full_circle_by_g2_is_four_quarters_of_short_chords():
@@ -82,14 +79,15 @@ def test_coordinates_beyond_the_limit_are_refused():
     assert reply == "error: line 10: coordinate out of range"
 
 
-def test_ticks_follow_the_feed_and_never_outrun_the_steps():
+def test_a_sample_is_its_ticks_unless_the_steps_need_more():
     plan, _ = ends(["G1 X10 F600"])
     seg = plan_steps(plan, CFG, lambda p: (p // 40, np.zeros(len(p), np.int64)))  # 40 um per step
-    assert np.all(seg.ticks == 500 * 60 * 10000 // 600000)  # 0.5 mm at 10 mm/s = 500 ticks
+    assert np.all(seg.ticks == CFG.tick_hz // CFG.sample_hz) and seg.overspeed == 0
+    assert seg.ticks.sum() > 1000 * 10 * 10000 // 10000  # 10 mm at 10 mm/s: over a second of samples
     fast, _ = ends(["G0 X10"])
     seg = plan_steps(fast, CFG, lambda p: (p // 1, np.zeros(len(p), np.int64)))  # 1 um per step
-    assert np.all(seg.ticks >= np.abs(seg.delta).max(1))
-    assert np.all(seg.ticks == 500)
+    assert np.all(seg.ticks == np.maximum(10, np.abs(seg.delta).max(1)))
+    assert seg.overspeed == int((np.abs(seg.delta).max(1) > 10).sum()) > 0  # 50 um per 10-tick sample
 
 
 @settings(max_examples=400, deadline=None, database=None)

@@ -1,0 +1,110 @@
+/*
+ * nnik_plan.h - the motion planner and the fixed-rate sampler of the G-code firmware.  Portable
+ * C99, integer arithmetic only; nnik/firmware/gcode/planner.py repeats it bit for bit.
+ *
+ * Units.  Positions are whole micrometres in the machine frame less the work origin.  A sample
+ * is 1 / NNIK_GC_SAMPLE_HZ s.  Speeds are Q16 micrometres per sample (v = um/sample * 65536),
+ * accelerations Q16 micrometres per sample squared, unit vectors Q30.
+ *
+ * Blocks.  A G-code line is one block, an arc chord is one block.  A block holds its end point,
+ * its floor length L = isqrt(dx^2 + dy^2), its unit vector u = trunc(d * 2^30 / L) per axis, its
+ * nominal speed vn = floor(min(F, NNIK_GC_MAX_FEED_UM_MIN) * 65536 / (60 * SAMPLE_HZ)) and its
+ * acceleration acc = min over the moving axes of floor(a_axis * L / |d_axis|) (a_axis / |u_axis|).
+ *
+ * Lookahead.  The queue holds NNIK_PL_N blocks.  When a block arrives, the junction with the
+ * block before it gets its speed limit (grbl's junction deviation, all in integers):
+ *     dot = (u1x u2x + u1y u2y) >> 30 (floor), sin(theta/2) = isqrt((2^30 + dot) << 29) (Q30),
+ *     r = min(floor(sin * 2^16 / (2^30 - sin)), 2^31 - 1) (2^31 - 1 when sin = 2^30),
+ *     vj^2 = min(acc1, acc2) * JDEV_UM * r (Q32), jmax = min(vn1, vn2, isqrt(vj^2)),
+ * and a backward pass sets every exit speed: the last block's exit is 0, and going back
+ *     exit_i = min(jmax_i, isqrt(exit_{i+1}^2 + (acc_{i+1} * L_{i+1} << 17)))
+ * (jmax_i itself when acc * L >= 2^40 or jmax^2 <= the sum; the pass stops where an exit does
+ * not change).  There is no forward pass: the sampler below never changes speed by more than acc
+ * per sample, which is what a forward pass would plan.
+ *
+ * Determinism.  The sampler runs only on blocks whose exit speed is final: while the queue is
+ * full (it runs until the head block has been left behind, then the parser adds the next block)
+ * or when the queue is flushed (M400, M2, M30, G4, a tool change, the end of the job: it runs
+ * until the last block ends at rest).  What it produces therefore depends only on the order of
+ * the blocks and flushes, never on serial timing, and the Python model repeats it exactly.
+ *
+ * Sampling.  The state is the head block, the distance s along it (Q16 um) and the speed v.  Each
+ * sample picks the first of these speeds that can still brake to the block's exit speed ve after
+ * moving one sample: up = v + acc (at most vn; above vn: v - acc, at least vn), hold = min(v, vn)
+ * (not when 0);
+ * else down = max(v - acc, ve, acc >> 2, 1).  "Can brake" for a speed c with rem = L - s:
+ *     c <= ve, or rem > c and 2 acc d >= ceil(c / 256)^2 - floor(ve / 256)^2, d = (rem - c) >> 16
+ * (d in whole um; when d > floor((2^32 - 1) / (2 acc)), kept per block, it passes without the
+ * product).  Then s += v; at
+ * or past the end of a block with exit 0 the sample lands exactly on its end and v = 0 (a stop);
+ * past the end of any other block the remainder carries into the next.  The point is
+ * start + ((u * floor(s / 65536)) >> 30) per axis (arithmetic shift: floor), or the end point.
+ */
+#ifndef NNIK_PLAN_H
+#define NNIK_PLAN_H
+
+#include <stdint.h>
+
+#include "nnik_gcode_config.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#ifndef NNIK_PL_N
+#define NNIK_PL_N 8 /* blocks of lookahead */
+#endif
+
+typedef struct {
+    int32_t end[2];  /* um */
+    int32_t u[2];    /* Q30 */
+    uint32_t len;    /* um, floor */
+    uint32_t vn;     /* nominal speed, Q16 um/sample */
+    uint32_t acc;    /* Q16 um/sample^2 */
+    uint32_t dbig;   /* floor((2^32 - 1) / (2 acc)): the brake test's product fits 32 bits below it */
+    uint32_t jmax;   /* speed limit at the junction with the next block (0: none yet) */
+    uint32_t exit;   /* planned exit speed */
+    uint16_t tool;   /* the tool word of the block (duty | 0x100 for M4) */
+} nnik_pl_block_t;
+
+typedef struct {
+    nnik_pl_block_t q[NNIK_PL_N];
+    uint8_t head, count;
+    int32_t start[2]; /* where the head block starts */
+    int32_t last[2];  /* where the last block queued ends */
+    uint32_t r_um;    /* distance left in the head block: r_um + r_fr / 65536 um (s = L - that) */
+    uint16_t r_fr;
+    uint32_t v;       /* speed, Q16 um/sample */
+    int32_t feed;     /* the feed whose vn is cached below */
+    uint32_t feed_vn;
+} nnik_plan_t;
+
+/* One sample: the point, the speed used for it, the nominal speed and tool of its block. */
+typedef struct {
+    int32_t p[2];
+    uint32_t v, vn;
+    uint16_t tool;
+} nnik_pl_sample_t;
+
+/* At rest at p (um). */
+void nnik_pl_init(nnik_plan_t *pl, const int32_t p[2]);
+
+/* Queue a block to (x, y) at feed (um/min) with its tool word; a block of length 0 is dropped.
+ * The queue must not be full (nnik_pl_full). */
+void nnik_pl_push(nnik_plan_t *pl, int32_t x, int32_t y, int32_t feed, uint16_t tool);
+
+/* 1 while the head block is final and the sampler may run: the queue is full, or flushing and
+ * not empty. */
+uint8_t nnik_pl_ready(const nnik_plan_t *pl, uint8_t flushing);
+
+/* One sample (only when nnik_pl_ready); pops the blocks it leaves behind. */
+void nnik_pl_sample(nnik_plan_t *pl, nnik_pl_sample_t *out);
+
+/* floor(sqrt(v)), as in nnik_gcode.c */
+uint32_t nnik_isqrt64(uint64_t v);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* NNIK_PLAN_H */

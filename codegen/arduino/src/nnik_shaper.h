@@ -1,0 +1,47 @@
+/*
+ * nnik_shaper.h - input shaping of the sampled Cartesian trajectory, per axis.  Portable C99,
+ * integer only; nnik/firmware/gcode/shaper.py repeats it bit for bit.
+ *
+ * For each axis, NNIK_SH_N impulses of amplitude A_i (Q15, summing to exactly 32768) at delays
+ * d_i (whole samples, 0 <= d_i <= NNIK_SH_LEN):
+ *     shaped[n] = p[n] + ((16384 - sum_i A_i * W_i[n]) >> 15),   W_i[n] = p[n] - p[n - d_i]
+ * (an arithmetic shift: floor), which is round half up of sum_i A_i * p[n - d_i] / 32768.  Before
+ * the first sample every past p is the start point.  The memory holds the per-sample increments
+ * p[n] - p[n-1] as int16 (NNIK_SH_LEN of them per axis: 2 * 2 * NNIK_SH_LEN bytes) and the running
+ * window sums W_i as int16; nnik.firmware.config checks that NNIK_SH_LEN * (the largest move per
+ * sample + 2 um) < 2^15, so every |W| < 2^15 and the sum of A_i W_i < 2^31.  NNIK_SH_LEN 0: no shaper, the samples pass unchanged, no memory.
+ */
+#ifndef NNIK_SHAPER_H
+#define NNIK_SHAPER_H
+
+#include <stdint.h>
+
+#include "nnik_gcode_config.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#ifndef NNIK_SH_LEN
+#define NNIK_SH_LEN 0
+#endif
+
+typedef struct {
+    int32_t last[2]; /* p[n-1] */
+#if NNIK_SH_LEN > 0
+    int16_t inc[2][NNIK_SH_LEN];
+    int16_t w[2][NNIK_SH_N];
+    uint8_t at; /* slot of the next increment */
+#endif
+} nnik_shaper_t;
+
+void nnik_sh_init(nnik_shaper_t *sh, const int32_t p[2]);
+
+/* the shaped point of the next sample p */
+void nnik_sh_step(nnik_shaper_t *sh, const int32_t p[2], int32_t out[2]);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* NNIK_SHAPER_H */

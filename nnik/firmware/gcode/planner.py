@@ -1,0 +1,252 @@
+"""The firmware's motion planner and fixed-rate sampler in Python, bit for bit with
+codegen/arduino/src/nnik_plan.c (its header states every rule and rounding; in short):
+
+* units: um (machine frame less the work origin), speeds Q16 um/sample, accelerations Q16
+  um/sample^2, unit vectors Q30; a block is a line or an arc chord;
+* lookahead: grbl's junction deviation at each junction, a backward pass for the exit speeds,
+  the last queued block ending at rest; the sampler changes speed by at most the block's
+  acceleration per sample (the forward pass is implicit);
+* determinism: samples are taken only while the queue is full (until the head block is left
+  behind) or flushed (until it is empty), so they depend on the block order alone.
+
+``run_ops`` plays the interpreter's operations (push, flush, rest) through the planner, the shaper
+and the sample clock the way nnik_gcode.c does, and returns the stream of stepper segments before
+the IK (one per sample, plus the rest segments).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from math import isqrt
+
+import numpy as np
+
+from nnik.firmware.config import MachineConfig
+
+Q30 = 1 << 30
+U32 = 0xFFFFFFFF
+R_MAX = 0x7FFFFFFF
+
+
+@dataclass
+class Block:
+    end: tuple[int, int]
+    u: tuple[int, int]
+    len: int
+    vn: int
+    acc: int
+    tool: int
+    index: int  # the push's index in the job (its move is the interpreter's)
+    jmax: int = 0
+    exit: int = 0
+
+
+def _trunc_q30(n: int, L: int) -> int:
+    q = (abs(n) << 30) // L
+    return -q if n < 0 else q
+
+
+def _acc_axis(a: int, L: int, n: int) -> int:
+    return min(a * L // n, U32)
+
+
+def junction(a: Block, b: Block, cfg: MachineConfig) -> int:
+    """The speed limit at the junction a -> b (nnik_plan.c junction())."""
+    dot = (a.u[0] * b.u[0] + a.u[1] * b.u[1]) >> 30
+    lim = min(a.vn, b.vn)
+    if dot <= -Q30:
+        return 0
+    dot = min(dot, Q30)
+    sn = isqrt((Q30 + dot) << 29)
+    r = R_MAX if sn >= Q30 else min((sn << 16) // (Q30 - sn), R_MAX)
+    vj2 = min(a.acc, b.acc) * cfg.junction_dev_um * r
+    return lim if vj2 >= lim * lim else isqrt(vj2)
+
+
+class Planner:
+    """nnik_plan_t: the queue, the head's progress and the speed."""
+
+    def __init__(self, cfg: MachineConfig, p=(0, 0)):
+        self.cfg = cfg
+        self.n = cfg.plan_blocks
+        self.q: list[Block] = []
+        self.start = tuple(p)
+        self.last = tuple(p)
+        self.s = 0  # Q16 um along the head block
+        self.v = 0
+        self.acc = cfg.acc_q16
+
+    def full(self) -> bool:
+        return len(self.q) == self.n
+
+    def ready(self, flushing: bool) -> bool:
+        return len(self.q) == self.n or (flushing and bool(self.q))
+
+    def push(self, x: int, y: int, feed: int, tool: int, index: int) -> None:
+        dx, dy = x - self.last[0], y - self.last[1]
+        if not dx and not dy:
+            return
+        L = isqrt(dx * dx + dy * dy)
+        feed = min(feed, self.cfg.max_feed_um_min)
+        vn = (feed << 16) // (60 * self.cfg.sample_hz)
+        acc = U32
+        for a, d in zip(self.acc, (dx, dy)):
+            if d:
+                acc = min(acc, _acc_axis(a, L, abs(d)))
+        b = Block((x, y), (_trunc_q30(dx, L), _trunc_q30(dy, L)), L, vn, acc, tool, index)
+        if self.q:
+            self.q[-1].jmax = junction(self.q[-1], b, self.cfg)
+        self.q.append(b)
+        self.last = (x, y)
+        self._backward()
+
+    def _backward(self) -> None:
+        q = self.q
+        q[-1].exit = 0
+        for k in range(len(q) - 2, -1, -1):
+            b, n = q[k], q[k + 1]
+            t, ex = n.acc * n.len, b.jmax
+            if t < 1 << 40:
+                e2 = n.exit * n.exit + (t << 17)
+                if ex * ex > e2:
+                    ex = isqrt(e2)
+            if ex == b.exit:
+                return
+            b.exit = ex
+
+    @staticmethod
+    def _can_brake(c: int, rem: int, ve: int, acc: int) -> bool:
+        if c <= ve:
+            return True
+        if rem <= c:
+            return False
+        d = (rem - c) >> 16
+        if d > U32 // (2 * acc):
+            return True
+        cq, eq = (c + 255) >> 8, ve >> 8
+        return 2 * acc * d >= cq * cq - eq * eq
+
+    def sample(self) -> tuple[tuple[int, int], int, int, int, int]:
+        """One sample: (point, speed used, its block's vn, tool word, push index)."""
+        b = self.q[0]
+        s, v = self.s, self.v
+        rem = (b.len << 16) - s
+        if v < b.vn:
+            c = min(v + b.acc, b.vn)
+        elif v > b.vn:
+            c = v - b.acc if (v > b.acc and v - b.acc > b.vn) else b.vn
+        else:
+            c = v
+        if not self._can_brake(c, rem, b.exit, b.acc):
+            c = min(v, b.vn)  # hold (not at rest: the sample must move)
+            if not c or not self._can_brake(c, rem, b.exit, b.acc):
+                fl = max(b.exit, b.acc >> 2, 1)
+                c = max(v - b.acc if v > b.acc else 0, fl)
+        used = c
+        s += c
+        stop = False
+        while s >= b.len << 16:
+            self.start = b.end
+            self.q.pop(0)
+            if not b.exit or not self.q:
+                stop, s, c = True, 0, 0
+                break
+            s -= b.len << 16
+            b = self.q[0]
+        self.v, self.s = c, s
+        if stop:
+            p = b.end
+        else:
+            su = s >> 16
+            p = (self.start[0] + ((b.u[0] * su) >> 30), self.start[1] + ((b.u[1] * su) >> 30))
+        return p, used, b.vn, b.tool, b.index
+
+
+class Shaper:
+    """nnik_shaper.c: shaped = p + ((16384 - sum A_i (p[n] - p[n - d_i])) >> 15) per axis."""
+
+    def __init__(self, cfg: MachineConfig, p=(0, 0)):
+        self.taps = cfg.shaper_taps
+        self.hist = [list(), list()]  # the last shaper_len + 1 inputs per axis, newest last
+        self.n = cfg.shaper_len
+        for a in range(2):
+            self.hist[a] = [p[a]] * (self.n + 1)
+
+    def step(self, p) -> tuple[int, int]:
+        if not self.n:
+            return tuple(p)
+        out = []
+        for a in range(2):
+            h = self.hist[a]
+            h.pop(0)
+            h.append(p[a])
+            amps, delays = self.taps[a]
+            acc = 16384 - sum(A * (p[a] - h[-1 - d]) for A, d in zip(amps, delays) if d)
+            out.append(p[a] + (acc >> 15))
+        return out[0], out[1]
+
+
+@dataclass
+class Stream:
+    """The stepper segments before the IK: one per sample (kind 0) or rest (kind 1)."""
+
+    kind: list[int] = field(default_factory=list)
+    planned: list[tuple[int, int]] = field(default_factory=list)  # the planner's point (um)
+    shaped: list[tuple[int, int]] = field(default_factory=list)  # what the IK gets (um, less origin)
+    speed: list[int] = field(default_factory=list)  # planned speed of the sample, Q16 um/sample
+    vn: list[int] = field(default_factory=list)
+    tool: list[int] = field(default_factory=list)  # tool word (samples) or fixed duty word (rests)
+    rest_ticks: list[int] = field(default_factory=list)  # 0 for samples
+    block: list[int] = field(default_factory=list)  # push index of the sample's block (-1: rest)
+
+
+def run_ops(ops: list[tuple], cfg: MachineConfig) -> Stream:
+    """ops: ("push", x, y, feed, tool, index), ("flush",), ("rest", ticks, tool)."""
+    pl, sh, st = Planner(cfg), Shaper(cfg), Stream()
+    settle, tail_tool = 0, 0
+
+    def out(p, tool, v, vn, blk, kind=0, ticks=0):
+        st.kind.append(kind)
+        st.planned.append(tuple(p))
+        st.shaped.append(sh.step(p) if kind == 0 else st.shaped[-1] if st.shaped else (0, 0))
+        st.speed.append(v)
+        st.vn.append(vn)
+        st.tool.append(tool)
+        st.rest_ticks.append(ticks)
+        st.block.append(blk)
+
+    def sample():
+        nonlocal settle, tail_tool
+        p, v, vn, tool, idx = pl.sample()
+        settle, tail_tool = cfg.shaper_len, tool
+        out(p, tool, v, vn, idx)
+
+    def flush():
+        nonlocal settle
+        while pl.ready(True):
+            sample()
+        while settle:
+            settle -= 1
+            out(pl.start, tail_tool, 0, 1, -1)
+
+    for op in ops:
+        if op[0] == "push":
+            while pl.ready(False):
+                sample()
+            pl.push(op[1], op[2], op[3], op[4], op[5])
+        elif op[0] == "flush":
+            flush()
+        else:
+            flush()
+            out(pl.start, op[2], 0, 1, -1, kind=1, ticks=op[1])
+    flush()
+    return st
+
+
+def duty_of(stream: Stream) -> np.ndarray:
+    """OCR2A per segment: the tool word's duty; M4 (0x100) scaled by min(v, vn) / vn."""
+    tool = np.asarray(stream.tool, dtype=np.int64)
+    v = np.minimum(np.asarray(stream.speed, dtype=np.int64), np.asarray(stream.vn, dtype=np.int64))
+    vn = np.asarray(stream.vn, dtype=np.int64)
+    base = tool & 0xFF
+    return np.where((tool & 0x100) != 0, base * v // vn, base)
