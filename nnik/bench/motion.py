@@ -46,10 +46,10 @@ def trained(name: str) -> Path:
 
 
 def machines(scn, plan_blocks: int, sample_hz: int = 1000) -> dict:
-    """No shaper and ZVD 40 Hz; at other sample rates the max feed is capped where the planner's
-    speeds must stay below 128 um per sample (3,839 mm/min at 500 Hz)."""
+    """No shaper and ZVD 40 Hz; the max feed is capped where the planner's speeds must stay below
+    256 um per sample (7,679 mm/min at 500 Hz)."""
     base = default_machine(scn, "none")
-    top = ((1 << 23) - 1) * 60 * sample_hz // 65536 // 1000 * 1000
+    top = ((1 << 24) - 1) * 60 * sample_hz // 65536 // 1000 * 1000
     base = replace(base, plan_blocks=plan_blocks, sample_hz=sample_hz, max_feed_um_min=min(base.max_feed_um_min, top))
     return {"none": base, "zvd": replace(base, shaper="zvd", shaper_taps=shaper_taps("zvd", ZVD, base.sample_hz))}
 

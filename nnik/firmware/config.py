@@ -97,8 +97,8 @@ class MachineConfig:
             raise ValueError(f"acceleration must be {lo / 1000:g}..{hi // 1000} mm/s^2 at {self.sample_hz} Hz samples")
         if not 1 <= self.junction_dev_um <= 1000:
             raise ValueError("junction deviation must be 0.001..1 mm")
-        if not MIN_FEED_UM_MIN <= self.max_feed_um_min or self.vn_max_q16 >= 1 << 23:
-            top = ((1 << 23) - 1) * 60 * self.sample_hz // 65536 // 1000
+        if not MIN_FEED_UM_MIN <= self.max_feed_um_min or self.vn_max_q16 >= 1 << 24:
+            top = ((1 << 24) - 1) * 60 * self.sample_hz // 65536 // 1000
             raise ValueError(f"max feed must be 1..{top} mm/min at {self.sample_hz} Hz samples")
         if self.shaper not in SHAPER_KINDS:
             raise ValueError(f"shaper must be one of {', '.join(SHAPER_KINDS)}")

@@ -160,11 +160,11 @@ static uint8_t can_brake(uint32_t c, uint32_t r_um, uint16_t r_fr, const nnik_pl
     if (r_um < ch || (r_um == ch && (uint16_t)(r_fr - (uint16_t)c) == 0))
         return 0; /* rem <= c */
     d = r_um - ch;
-    if (d > b->dbig) /* 2 acc d > 2^32 - 1 > any ceil(c / 256)^2 */
+    if (d > b->dbig) /* 2 acc d > 2^32 - 1 > any 4 ceil(c / 512)^2 */
         return 1;
-    cq = (c + 255) >> 8;
-    eq = b->exit >> 8;
-    return 2 * b->acc * d >= cq * cq - eq * eq;
+    cq = (c + 511) >> 9;
+    eq = b->exit >> 9;
+    return 2 * b->acc * d >= 4 * (cq * cq - eq * eq);
 }
 
 /* floor(u * s / 2^30), |u| <= 2^30, s < 2^29, by 16-bit products (no 64-bit arithmetic) */
@@ -214,7 +214,7 @@ void nnik_pl_sample(nnik_plan_t *pl, nnik_pl_sample_t *out)
         pl->r_um -= ch;
         pl->r_fr = (uint16_t)(pl->r_fr - (uint16_t)c);
     } else {
-        o = c - ((pl->r_um << 16) + pl->r_fr); /* rem <= c < 2^23 here */
+        o = c - ((pl->r_um << 16) + pl->r_fr); /* rem <= c < 2^24 here */
         for (;;) {
             pl->start[0] = b->end[0];
             pl->start[1] = b->end[1];

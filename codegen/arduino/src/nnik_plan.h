@@ -33,7 +33,8 @@
  * moving one sample: up = v + acc (at most vn; above vn: v - acc, at least vn), hold = min(v, vn)
  * (not when 0);
  * else down = max(v - acc, ve, acc >> 2, 1).  "Can brake" for a speed c with rem = L - s:
- *     c <= ve, or rem > c and 2 acc d >= ceil(c / 256)^2 - floor(ve / 256)^2, d = (rem - c) >> 16
+ *     c <= ve, or rem > c and 2 acc d >= 4 (ceil(c / 512)^2 - floor(ve / 512)^2), d = (rem - c) >> 16
+ * (speeds below 2^24, 256 um per sample, so every product fits 32 bits)
  * (d in whole um; when d > floor((2^32 - 1) / (2 acc)), kept per block, it passes without the
  * product).  Then s += v; at
  * or past the end of a block with exit 0 the sample lands exactly on its end and v = 0 (a stop);

@@ -123,8 +123,8 @@ class Planner:
         d = (rem - c) >> 16
         if d > U32 // (2 * acc):
             return True
-        cq, eq = (c + 255) >> 8, ve >> 8
-        return 2 * acc * d >= cq * cq - eq * eq
+        cq, eq = (c + 511) >> 9, ve >> 9
+        return 2 * acc * d >= 4 * (cq * cq - eq * eq)
 
     def sample(self) -> tuple[tuple[int, int], int, int, int, int]:
         """One sample: (point, speed used, its block's vn, tool word, push index)."""

@@ -231,7 +231,7 @@ def test_random_jobs_with_each_shaper_and_planner_setting(corexy_lib, kind):
     @given(lines=jobs(), ax=st.integers(100, 15000), ay=st.integers(100, 15000), jd=st.integers(1, 200),
            feed=st.integers(600, 9000), hz=st.sampled_from([500, 1000, 2000]), n=st.integers(2, 16))
     def check(lines, ax, ay, jd, feed, hz, n):
-        feed = min(feed, ((1 << 23) - 1) * 60 * hz // 65536 // 1000)  # speeds below 128 um per sample
+        feed = min(feed, ((1 << 24) - 1) * 60 * hz // 65536 // 1000)  # speeds below 256 um per sample
         cfg = replace(info["machine"], accel_um_s2=(ax * 1000, ay * 1000), junction_dev_um=jd,
                       max_feed_um_min=feed * 1000, sample_hz=hz, plan_blocks=n, shaper="none", shaper_taps=())
         cfg = shaped_cfg(cfg, kind, f_hz=(40.0, 33.0) if hz >= 1000 else (40.0, 50.0))
