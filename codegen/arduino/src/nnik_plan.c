@@ -132,7 +132,7 @@ void nnik_pl_push(nnik_plan_t *pl, int32_t x, int32_t y, int32_t feed, uint16_t 
             acc = a;
     }
     b->acc = acc;
-    b->dbig = 0xFFFFFFFFUL / (2 * (uint64_t)acc);
+    b->dbig = 0xFFFFFFFFUL / (2 * acc); /* acc <= a_axis * sqrt(2) < 2^23: 32-bit division */
     b->tool = tool;
     b->jmax = 0;
     b->exit = 0;
@@ -218,7 +218,7 @@ void nnik_pl_sample(nnik_plan_t *pl, nnik_pl_sample_t *out)
         for (;;) {
             pl->start[0] = b->end[0];
             pl->start[1] = b->end[1];
-            pl->head = (uint8_t)((pl->head + 1) % NNIK_PL_N);
+            pl->head = (uint8_t)(pl->head + 1 == NNIK_PL_N ? 0 : pl->head + 1);
             pl->count--;
             if (!b->exit || !pl->count) { /* a stop: exactly on the end, at rest */
                 stop = 1;
