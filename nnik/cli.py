@@ -353,13 +353,31 @@ def cmd_job(args) -> None:
 
     require_deliverable(out, "job")  # the job runs the firmware: only the verified pick, never the MLP instead
     res = run_job(out, Path(args.job), seg_um=args.seg_um, use_chip=False if args.no_chip else None,
-                  shaper=args.shaper)
+                  shaper=args.shaper, precompensate=args.precompensate)
     t = Table(title=f"G-code job {res['job']} on {res['scenario']} ({res['seconds']:.2f} s of motion)")
     t.add_column("item")
     t.add_column("result")
     for h, v in zip(JOB_HEADER, job_row(res)):
         t.add_row(h, v)
     console.print(t)
+    if res.get("dynamics"):
+        from nnik.report.job_dynamics import METHOD_HEADER, method_rows
+
+        d = res["dynamics"]
+        t = Table(title=f"the belts (f = {d['model']['f_hz']} Hz, zeta = {d['model']['zeta']}): every compensation "
+                        "on the tip, from the firmware's steps")
+        for h in METHOD_HEADER:
+            t.add_column(h)
+        for row in method_rows(res):
+            t.add_row(*row)
+        console.print(t)
+        pick = d["pick"]
+        if "traded" in pick:
+            console.print(f"auto: {pick['method']} (contour target {pick['target_um']:.1f} µm, {pick['target_from']}); "
+                          f"{pick['traded'] or 'nothing to trade'}")
+        if "gcode" in pick:
+            console.print(f"precompensated job: {pick['gcode']}")
+        console.print(f"belts plot: {d['png']}")
     chip = res["chip"]
     if "not_run" not in chip:
         console.print(f"self-test on simavr: {chip['selftest']}")
@@ -461,7 +479,11 @@ def build_parser() -> argparse.ArgumentParser:
                    "an error with a model directory as the first argument")
     p.add_argument("--seg-um", type=int, help="longest arc chord in um (default 500)")
     p.add_argument("--shaper", metavar="KIND",
-                   help="input shaper on the chip: none, zv, mzv, zvd, ei (default: the scenario's [motion] shaper)")
+                   help="input shaper on the chip: none, zv, mzv, zvd, ei, or auto (the one that meets [motion] "
+                        "max_contour_um at the least job time); default: the scenario's [motion] shaper")
+    p.add_argument("--precompensate", action="store_true",
+                   help="write OUTDIR/job/JOB_precompensated.gcode (the job rewritten so the modelled belts' tip "
+                        "follows the path) and run that instead")
     p.add_argument("--no-chip", action="store_true", help="Python model only, no simavr run")
     p.set_defaults(func=cmd_job)
     return ap

@@ -26,7 +26,7 @@ def job_section_png(outdir: Path) -> list[dict]:
             continue
         row = job_row(res)
         cap = dict(zip(JOB_HEADER, row))
-        items.append({"png": png, "row": row, "caption": (
+        items.append({"png": png, "row": row, "res": res, "caption": (
             f"G-code job {res['job']}: {res['segments']} segments, {res['steps']} steps; contour error max / RMS "
             f"{cap['contour max / RMS (µm)']} µm (IK {cap['IK max (µm)']}, chord {cap['chord max (µm)']} µm); "
             f"simulated Uno: {cap['chip steps']} steps, sample loop {cap['sample loop CPU']} of the CPU; job time "

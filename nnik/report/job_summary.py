@@ -5,7 +5,8 @@ from __future__ import annotations
 JOB_HEADER = ("scenario", "job", "segments", "steps", "contour max / RMS (µm)", "IK max (µm)", "rounding max (µm)",
               "chord max (µm)", "chip steps", "cycles/sample", "sample loop CPU", "flash / RAM (B)",
               "tool on / travel (mm)", "tool on-time (s)", "chip tool changes", "job time (s)",
-              "peak step rate / limit (Hz)", "planner / shaper")
+              "peak step rate / limit (Hz)", "planner / shaper", "with belts: contour max / RMS (µm)",
+              "ringing / floor (µm)", "compensation")
 
 
 def _um(s: dict | None, rms: bool = False) -> str:
@@ -33,5 +34,13 @@ def job_row(r: dict) -> tuple[str, ...]:
               + (f" ({m['overspeed_samples']} samples stretched)" if m["overspeed_samples"] else ""),
               f"{m['accel_mm_s2'][0]:g}/{m['accel_mm_s2'][1]:g} mm/s², {m['sample_hz']} Hz, {m['shaper']}"
               + (f" ({m['shaper_ram_bytes']} B)" if m["shaper_ram_bytes"] else "")) if m else ("-", "-", "-")
+    d = r.get("dynamics")
+    if d:
+        tip = r["tip"]
+        pick = d["pick"]
+        how = d["chosen"] + (f" (auto: {pick['traded'] or 'nothing to trade'})" if "traded" in pick else "")
+        belts = (_um(tip["contour_um"], True), f"{tip['ringing_um']['max']:.1f} / {tip['ringing_floor_um']['max']:.1f}", how)
+    else:
+        belts = ("- (no [dynamics])", "-", "-")
     return (r["scenario"], r["job"], str(r["segments"]), str(r["steps"]), _um(r["contour_um"], True), _um(r["ik_um"]),
-            _um(r.get("rounding_um")), _um(r.get("chord_um")), *chip[:4], *tool, chip[4], *motion)
+            _um(r.get("rounding_um")), _um(r.get("chord_um")), *chip[:4], *tool, chip[4], *motion, *belts)

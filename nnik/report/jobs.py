@@ -7,6 +7,9 @@ from __future__ import annotations
 
 import shutil
 
+from pathlib import Path
+
+from nnik.report import job_dynamics
 from nnik.report.job_section import JOB_HEADER, job_section_png
 from nnik.report.document import Fig, Section, Table, txt
 
@@ -40,9 +43,21 @@ def build(ctx) -> Section:
     for it in items:
         name = f"{PNG_PREFIX}{it['png'].name}"
         ctx.plot(sec, lambda it=it, name=name: _copy(ctx, it, name))
+    for it in items:  # the belts (issue 18): every compensation on the tip, and its picture
+        res = it["res"]
+        if not res.get("dynamics"):
+            continue
+        sec.tables.extend(job_dynamics.tables(res))
+        png = Path(res["dynamics"]["png"])
+        if png.is_file():
+            dyn = {"png": png, "caption": (
+                f"{res['job']}: the programmed path, the tip with no compensation and with {res['dynamics']['chosen']}, "
+                "and the tip's contour error over time (the tip integrated from the firmware's steps through each "
+                "axis's spring-damper)")}
+            ctx.plot(sec, lambda it=dyn, name=f"{PNG_PREFIX}{png.name}": _copy(ctx, it, name))
     return sec
 
 
 def _copy(ctx, it: dict, name: str) -> Fig:
     shutil.copyfile(it["png"], ctx.out / name)
-    return Fig(name, f"G-code job {it['png'].stem}", it["caption"])
+    return Fig(name, f"G-code job {Path(it['png']).stem}", it["caption"])

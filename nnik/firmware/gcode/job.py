@@ -27,6 +27,7 @@ from nnik.firmware.gcode.plot import job_png
 from nnik.firmware.gcode.steps import chip_events, chip_tool_events, model_events, model_tool_events
 
 CLOCK_HZ = 16_000_000
+SHAPER_CHOICES = ("none", "zv", "mzv", "zvd", "ei", "auto")
 
 
 MACHINE_TAG = "; nnik-machine:"
@@ -177,18 +178,40 @@ def machine_for(scn, shaper: str | None, seg_um: int | None) -> MachineConfig:
 
 
 def run_job(outdir: Path, job_path: Path, seg_um: int | None = None, use_chip: bool | None = None,
-            shaper: str | None = None) -> dict:
+            shaper: str | None = None, precompensate: bool = False) -> dict:
     """Run a job; use_chip None: on the simulated chip when the toolchain is there; shaper:
-    none|zv|mzv|zvd|ei overrides the scenario's [motion] shaper."""
+    none|zv|mzv|zvd|ei|auto overrides the scenario's [motion] shaper; precompensate: run the
+    job rewritten offline for the belts (nnik.firmware.gcode.compensation).  With a [dynamics]
+    table every method is compared on the tip and the chosen one goes to the chip."""
     from nnik.firmware.gcode import chip
 
     outdir, job_path = Path(outdir), Path(job_path)
     scn = load_scenario_of(outdir)
-    cfg = machine_for(scn, shaper, seg_um)
+    if shaper is not None and shaper not in SHAPER_CHOICES:
+        raise NnikError(f"unknown shaper {shaper!r}; choose one of {', '.join(SHAPER_CHOICES)}", None, "--shaper")
+    asked = "precompensated" if precompensate else (shaper or (scn.motion or {}).get("shaper", "none"))
+    if asked != "none" and not scn.dynamics:
+        where = "--precompensate" if precompensate else "--shaper" if shaper else "[motion] shaper"
+        raise NnikError(f"{'precompensation' if precompensate else 'shaper ' + repr(asked)} needs a [dynamics] table "
+                        f"(f_hz, zeta) in {scn.source}", None, where)
+    cfg = machine_for(scn, "none" if asked in ("auto", "precompensated") else asked, seg_um)
     lines = read_job(job_path)
     cfg = job_machine(lines, cfg, str(job_path))
     # a long job shows its stage on a terminal (nothing in a log: nnik.progress)
-    stages = bar(total=3, desc=f"job {job_path.name}", unit="stage", leave=False)
+    stages = bar(total=4, desc=f"job {job_path.name}", unit="stage", leave=False)
+    dyn_fig = None
+    out = outdir / JOB_DIR
+    out.mkdir(parents=True, exist_ok=True)
+    if scn.dynamics:
+        from nnik.firmware.gcode.compensation import job_dynamics
+
+        stages.set_postfix_str("the belts: every compensation on the tip")
+        try:
+            cfg, lines, dyn_fig, _ = job_dynamics(scn, cfg, lines, ik_oracle(outdir), asked, precompensate,
+                                                  str(job_path), out, job_path.stem)
+        except ValueError as exc:
+            raise NnikError(str(exc), str(job_path)) from None
+    stages.update(1)
     stages.set_postfix_str("Python model of the firmware")
     plan, seg, events = python_model(outdir, lines, cfg, str(job_path))
     stages.update(1)
@@ -199,6 +222,10 @@ def run_job(outdir: Path, job_path: Path, seg_um: int | None = None, use_chip: b
            "tool": tool_report(seg, cfg), "motion": motion_report(seg, cfg),
            **contour_report(scn, cfg, plan, seg, events)}
     plot = res.pop("plot")
+    if dyn_fig is not None:
+        chosen = dyn_fig["methods"][dyn_fig["chosen"]]
+        res["dynamics"] = dyn_fig
+        res["tip"] = {k: chosen[k] for k in ("contour_um", "dynamics_um", "ringing_um", "ringing_floor_um")}
     why = chip.tool_missing_reason()
     if use_chip is False or (use_chip is None and why):
         res["chip"] = {"not_run": "not asked" if use_chip is False else why}
@@ -222,8 +249,6 @@ def run_job(outdir: Path, job_path: Path, seg_um: int | None = None, use_chip: b
         res["chip"] = c
     stages.update(1)
     stages.set_postfix_str("plot")
-    out = outdir / JOB_DIR
-    out.mkdir(parents=True, exist_ok=True)
     title = (f"{scn.name}: {job_path.name}, {res['motion']['job_s']:.2f} s ({cfg.sample_hz} Hz samples, shaper "
              f"{cfg.shaper}); contour error max "
              f"{res['contour_um']['max']:.1f} µm, RMS {res['contour_um']['rms']:.1f} µm")

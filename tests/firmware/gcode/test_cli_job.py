@@ -22,10 +22,14 @@ def test_bad_gcode_is_one_line_naming_it_and_exit_2(picked_run, tmp_path, capsys
     assert main(["job", str(picked_run), str(tmp_path / "missing.gcode"), "--no-chip"]) == 2
     assert main(["job", str(picked_run), str(JOBS / "l_path.gcode"), "--seg-um", "50", "--no-chip"]) == 2
     capsys.readouterr()
-    for shaper, msg in (("zvd", "needs a [dynamics] table"), ("auto", "not available yet")):  # the galvo has no [dynamics]
+    for shaper, msg in (("zvd", "needs a [dynamics] table"), ("auto", "needs a [dynamics] table"),
+                        ("zvdd", "unknown shaper")):  # the galvo has no [dynamics]
         assert main(["job", str(picked_run), str(JOBS / "l_path.gcode"), "--shaper", shaper, "--no-chip"]) == 2
         err = capsys.readouterr().err.strip()
         assert "\n" not in err and msg in err and "--shaper" in err, err
+    assert main(["job", str(picked_run), str(JOBS / "l_path.gcode"), "--precompensate", "--no-chip"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err and "--precompensate" in err and "[dynamics]" in err, err
 
 
 def test_job_python_only_writes_figures_and_plot(picked_run, capsys):

@@ -90,3 +90,19 @@ def test_zvd_at_the_true_resonance_cuts_the_ringing_of_any_belt(machine, f, zeta
     if excess(none) > 5.0:  # a belt that rings visibly above the microsteps
         assert excess(zvd) < 0.5 * excess(none)
     assert np.isfinite(zvd["contour_um"]["max"])
+
+
+def test_job_reports_the_belts_and_auto_says_what_it_traded(corexy_run):
+    from nnik.firmware.gcode.job import run_job
+
+    res = run_job(corexy_run, JOBS / "l_path.gcode", use_chip=False, shaper="auto")
+    d = res["dynamics"]
+    assert d["pick"]["met"] and d["chosen"] == d["pick"]["method"] and Path(d["png"]).is_file()
+    assert res["machine"]["shaper"] == (d["chosen"] if d["chosen"] in ("zv", "mzv", "zvd", "ei") else "none")
+    assert res["tip"]["contour_um"]["max"] == d["methods"][d["chosen"]]["contour_um"]["max"]
+    # the tip includes the belts: never better than the steps themselves by more than the microstep blur
+    assert res["tip"]["contour_um"]["max"] > 0.5 * res["contour_um"]["max"] or d["chosen"] != "none"
+    pc = run_job(corexy_run, JOBS / "l_path.gcode", use_chip=False, precompensate=True)
+    path = Path(pc["dynamics"]["pick"]["gcode"])
+    assert path.is_file() and path.name == "l_path_precompensated.gcode" and pc["machine"]["shaper"] == "none"
+    assert pc["segments"] > res["segments"] * 0.9  # the rewritten job runs, sample by sample
