@@ -14,7 +14,7 @@ For each case, the tip's max and RMS distance to the programmed path (um) and th
 The firmware's runs are its Python model (bit for bit the simulated chip's steps, tests/firmware/
 gcode), on corexy_nonlinear's pick, at the case's acceleration and speed; the tip follows each
 Cartesian axis's spring-damper (nnik.dynamics.axis) from the steps.  The firmware samples at
-1 kHz (2 kHz where the speed needs it); the seed's time step applies to the inversion only.
+1 kHz (2 kHz where the speed needs it); the seed's time step applies to the least squares only.
 Results: build/bench/seed003.json and the table printed.
 """
 
@@ -44,7 +44,7 @@ OUT = Path("build") / "bench"
 REFERENCE = {"w": 100.0, "zeta": 0.5, "a": 5000.0, "v": 100.0, "dt": 0.005}
 VARIATIONS = [("w", 50.0), ("w", 200.0), ("zeta", 0.0), ("zeta", 1.0), ("a", 1000.0), ("a", 10000.0),
               ("v", 50.0), ("v", 200.0), ("dt", 0.1), ("dt", 0.001)]
-TICK_FINE = 10  # the inversion's base is simulated at 10 points per millisecond
+TICK_FINE = 10  # the least squares' base is simulated at 10 points per millisecond
 
 
 def cases() -> list[tuple[str, dict]]:
@@ -68,7 +68,7 @@ def machine(scn, case: dict):
                    sample_hz=fs, shaper="none", shaper_taps=())
 
 
-def inversion(run_none, cfg, dyn: dict, dt: float) -> dict:
+def seed_setting(run_none, cfg, dyn: dict, dt: float) -> dict:
     """The seed's setting: a base on a grid of the case's time step, linearly interpolated in
     between, fitted so the modelled tip follows the planned motion (nnik.dynamics.precompensate.
     least_squares: one linear solve, where the seed iterated fmincon); no firmware, no
@@ -109,7 +109,7 @@ def run_case(outdir: Path, scn, ik, case: dict) -> dict:
     if "none" in res and "error" not in res["none"]:
         from nnik.firmware.gcode.compensation import model_run
 
-        out["inversion"] = inversion((cfg,) + model_run(l_path(case["v"]), cfg, ik), cfg, dyn, case["dt"])
+        out["least squares"] = seed_setting((cfg,) + model_run(l_path(case["v"]), cfg, ik), cfg, dyn, case["dt"])
     return out
 
 
@@ -142,9 +142,9 @@ def main(argv=None) -> int:
         r = run_case(outdir, scn, ik, case)
         figures[name] = {"case": case, **r}
         rows.append((name, r))
-    cols = ["none", "zv", "mzv", "zvd", "ei", "precompensated", "inversion"]
+    cols = ["none", "zv", "mzv", "zvd", "ei", "precompensated", "least squares"]
     t = Table(title="Seed 003's L path: the tip's max / RMS distance to the path (um); job time; "
-                    "inversion's compute time")
+                    "the least squares' compute time")
     for h in ["case", "fs"] + cols[:-1] + ["least squares", "time none / best", "its compute"]:
         t.add_column(h)
     for name, r in rows:
@@ -155,13 +155,13 @@ def main(argv=None) -> int:
         best = min(ok, key=lambda m: ok[m]["contour_um"]["max"])
         t.add_row(name, f"{r['sample_hz']}", *[_cell(r.get(m)) for m in cols],
                   f"{r['none']['seconds']:.3f} / {ok[best]['seconds']:.3f} ({best})",
-                  f"{r['inversion']['compute_s']:.2f} s")
+                  f"{r['least squares']['compute_s']:.2f} s")
     console.print(t)
     ref = figures["reference"]
-    ratio = ref["inversion"]["contour_um"]["max"] / ref["none"]["contour_um"]["max"]
-    console.print(f"reference case: least squares {ref['inversion']['contour_um']['max']:.1f} um against "
+    ratio = ref["least squares"]["contour_um"]["max"] / ref["none"]["contour_um"]["max"]
+    console.print(f"reference case: least squares {ref['least squares']['contour_um']['max']:.1f} um against "
                   f"{ref['none']['contour_um']['max']:.1f} um uncompensated ({100 * ratio:.1f} %), computed in "
-                  f"{ref['inversion']['compute_s']:.2f} s (the seed's fmincon: up to 93 s); "
+                  f"{ref['least squares']['compute_s']:.2f} s (the seed's fmincon: up to 93 s); "
                   f"whole bench {time.perf_counter() - t0:.1f} s")
     OUT.mkdir(parents=True, exist_ok=True)
     (OUT / "seed003.json").write_text(json.dumps(figures, indent=2, default=float) + "\n")
