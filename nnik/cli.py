@@ -361,23 +361,9 @@ def cmd_job(args) -> None:
         t.add_row(h, v)
     console.print(t)
     if res.get("dynamics"):
-        from nnik.report.job_dynamics import METHOD_HEADER, method_rows
+        from nnik.report.job_dynamics import print_methods
 
-        d = res["dynamics"]
-        t = Table(title=f"the belts (f = {d['model']['f_hz']} Hz, zeta = {d['model']['zeta']}): every compensation "
-                        "on the tip, from the firmware's steps")
-        for h in METHOD_HEADER:
-            t.add_column(h)
-        for row in method_rows(res):
-            t.add_row(*row)
-        console.print(t)
-        pick = d["pick"]
-        if "traded" in pick:
-            console.print(f"auto: {pick['method']} (contour target {pick['target_um']:.1f} µm, {pick['target_from']}); "
-                          f"{pick['traded'] or 'nothing to trade'}")
-        if "gcode" in pick:
-            console.print(f"precompensated job: {pick['gcode']}")
-        console.print(f"belts plot: {d['png']}")
+        print_methods(console, res)
     chip = res["chip"]
     if "not_run" not in chip:
         console.print(f"self-test on simavr: {chip['selftest']}")

@@ -72,3 +72,24 @@ def tables(res: dict) -> list[Table]:
             t2.rows.append([txt(v, "label" if i == 0 else "num") for i, v in enumerate(row)])
         out.append(t2)
     return out
+
+
+def print_methods(console, res: dict) -> None:
+    """`nnik job`'s console: the methods table, auto's trade, the precompensated job, the PNG."""
+    from rich.table import Table as RichTable
+
+    d = res["dynamics"]
+    t = RichTable(title=f"the belts (f = {d['model']['f_hz']} Hz, zeta = {d['model']['zeta']}): every compensation "
+                        "on the tip, from the firmware's steps")
+    for h in METHOD_HEADER:
+        t.add_column(h)
+    for row in method_rows(res):
+        t.add_row(*row)
+    console.print(t)
+    pick = d["pick"]
+    if "traded" in pick:
+        console.print(f"auto: {pick['method']} (contour target {pick['target_um']:.1f} µm, {pick['target_from']}); "
+                      f"{pick['traded'] or 'nothing to trade'}")
+    if "gcode" in pick:
+        console.print(f"precompensated job: {pick['gcode']}")
+    console.print(f"belts plot: {d['png']}")
