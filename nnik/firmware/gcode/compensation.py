@@ -136,7 +136,7 @@ def compare(scn, cfg, lines: list[str], ik, dyn: dict, source: str, methods=METH
         r = evaluate(scn, c, plan, seg, ev, dyn, moves=programmed, keep_track=m in keep)
         if robust:
             r["robust"] = {k: {key: v for key, v in evaluate(scn, c, plan, seg, ev, _perturbed(dyn, *fz),
-                                                             moves=programmed).items() if key in ("contour_um", "ringing_um")}
+                                                             moves=programmed).items() if key in ("contour_um", "ringing_um", "ringing_floor_um")}
                            for k, fz in ROBUST.items()}
         out.setdefault(m, {}).update(r)
         out[m]["shaper_ram_bytes"] = c.shaper_ram_bytes

@@ -49,10 +49,12 @@ def test_shapers_trade_time_and_corners_the_way_their_durations_say(l_path):
 
 
 def test_robust_shapers_hold_with_the_frequency_off(l_path):
+    """Ringing above the steps' own floor (the microstep and the IK: no shaper removes them)."""
     none = l_path["none"]["robust"]
+    excess = lambda r: r["ringing_um"]["max"] - r["ringing_floor_um"]["max"]  # noqa: E731
     for m in ("zvd", "ei"):
         for case in ("f +20 %", "f -20 %", "zeta / 2"):
-            assert l_path[m]["robust"][case]["ringing_um"]["max"] < 0.6 * none[case]["ringing_um"]["max"], (m, case)
+            assert excess(l_path[m]["robust"][case]) < 0.5 * excess(none[case]), (m, case)
 
 
 def test_auto_meets_its_target_at_the_least_time(l_path):
