@@ -34,7 +34,7 @@ from nnik.firmware.gcode.tip import tip_report
 METHODS = ("none",) + KINDS + ("precompensated",)
 AUTO_SLACK = 1.25  # without a target: within 25 % of the best contour max
 SMOOTH_S = 0.005  # the precompensation's reference smoothing (two moving averages of 5 ms)
-PC_EVERY = 5  # a precompensated G1 line every 5 samples (5 ms at 1 kHz)
+PC_EVERY_S = 0.005  # a precompensated G1 line every 5 ms: 115,200 baud sends one in under 3 ms
 ROBUST = {"f +20 %": (1.2, 1.0), "f -20 %": (0.8, 1.0), "zeta / 2": (1.0, 0.5)}
 
 
@@ -90,7 +90,7 @@ def precompensate_lines(seg, cfg, dyn: dict, source: str) -> tuple[list[str], li
     header = ["; precompensated by nnik (model inversion of the belt axes on a reference smoothed",
               f"; by two {SMOOTH_S * 1000:g} ms moving averages) for f = {list(dyn['f_hz'])} Hz,",
               f"; zeta = {list(dyn['zeta'])}, from {source}"[:90]]
-    lines, src = pc_gcode(base, fs, PC_EVERY, np.zeros(2), header, tool)
+    lines, src = pc_gcode(base, fs, max(1, int(round(PC_EVERY_S * fs))), np.zeros(2), header, tool)
     move_of_line = [int(seg.move[owner[k]]) if k >= 0 else -1 for k in src]
     return lines, move_of_line, time.perf_counter() - t0
 
