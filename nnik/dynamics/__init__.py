@@ -2,5 +2,5 @@
 (seed 003), input shapers designed from (f, zeta), and offline precompensation.
 
 Python decides here; the firmware's fixed-point shaper (codegen/arduino/src/nnik_shaper.c and its
-model nnik.firmware.gcode.shaper) takes the constants that quantize() gives.
+model, the Shaper of nnik.firmware.gcode.planner) takes the constants that quantize() gives.
 """

@@ -46,7 +46,7 @@ def tip(base: np.ndarray, dt: float, f_hz: float, zeta: float) -> np.ndarray:
         return base.copy()
     ad, bd, c = discrete(f_hz, zeta, dt)
     num, den = ss2tf(ad, bd, c, np.zeros((1, 1)))
-    num, den = num[0], den
+    num = num[0]
     # no feedthrough: num[0] = 0, so out[k] follows the input up to k - 1, the tip at k dt
     zi = lfilter_zi(num, den) * base[0]
     out, _ = lfilter(num, den, base, zi=zi)

@@ -32,12 +32,6 @@ def smooth(p: np.ndarray, fs: float, smooth_s: float) -> np.ndarray:
     for _ in range(2):  # "valid": each pass only averages samples that exist (w - 1 fewer)
         q = np.stack([np.convolve(q[:, i], k, mode="valid") for i in range(q.shape[1])], 1)
     return q
-    k = np.ones(w) / w
-    for _ in range(2):
-        q = np.stack([np.convolve(q[:, i], k, mode="same") for i in range(q.shape[1])], 1)
-    q[:pad - w + 1] = p[0]  # the convolutions' own zero padding reaches only these
-    q[len(q) - (pad - w + 1):] = p[-1]
-    return q
 
 
 def invert(r: np.ndarray, fs: float, f_hz: tuple[float, float], zeta: tuple[float, float]) -> np.ndarray:
@@ -123,7 +117,7 @@ def least_squares(target: np.ndarray, fine_dt: float, dt: float, f_hz, zeta, smo
     out = np.zeros((m, target.shape[1]))
     for i in range(target.shape[1]):
         first = tip_of(np.interp(t_fine, grid, np.eye(1, m, 0)[0]), fine_dt, f_hz[i], zeta[i])
-        hat = np.interp(t_fine, grid[:3] , [0.0, 1.0, 0.0], right=0.0)  # the hat at grid[1]
+        hat = np.interp(t_fine, grid[:3], [0.0, 1.0, 0.0], right=0.0)  # the hat at grid[1]
         resp = tip_of(hat, fine_dt, f_hz[i], zeta[i])  # from rest at 0
         cols = np.zeros((n_fine, m))
         cols[:, 0] = first
