@@ -3,6 +3,7 @@
  * paths below give the same values as the wide ones (cheaper on AVR), nothing else.
  */
 #include "nnik_plan.h"
+#include "nnik_imath.h"
 
 #if NNIK_PL_N < 2 || NNIK_PL_N > 64
 #error "NNIK_PL_N must be 2..64"
