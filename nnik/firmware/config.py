@@ -17,6 +17,7 @@ TOOLS = ("laser", "pen", "servo", "spindle", "knife", "none")
 # M300 S at or below m300_down_max is down), "none" (never on)
 RULES = ("s", "z", "e", "m300", "none")
 SCALE_ONE = 1 << 16
+FEATURES = frozenset({"g5", "g93", "planes", "wcs"})
 SHAPER_KINDS = ("none", "zv", "mzv", "zvd", "ei")
 SHAPER_RAM_BUDGET = 512  # bytes of SRAM the shaper's buffers may take on the ATmega328
 MIN_FEED_UM_MIN = 1000
@@ -58,6 +59,9 @@ class MachineConfig:
     shift_um: tuple[int, int] = (0, 0)
     # soft limits, um (machine less the work origin): ((x_lo, y_lo), (x_hi, y_hi)); None: none
     bounds_um: tuple | None = None
+    # build options, as grbl's config.h: g5 (Marlin's Bezier), g93 (inverse time), planes (arcs in
+    # G18/G19), wcs (G10, G55-G59, G28.1, G30.1); a line that needs one left out is error 20
+    features: frozenset = FEATURES
 
     @property
     def rapid_um_min(self) -> int:
@@ -101,6 +105,8 @@ class MachineConfig:
             raise ValueError(f"tool rule must be one of {', '.join(RULES)}")
         if self.tool == "laser" and self.rule == "z":
             raise ValueError("a laser takes S, not Z: Z is its focus")
+        if not set(self.features) <= FEATURES:
+            raise ValueError(f"build options must be among {', '.join(sorted(FEATURES))}")
         if not 1 <= self.scale_q16 <= 1 << 24:
             raise ValueError("scale must be 1/65536..256")
         self._check_motion()
@@ -195,7 +201,8 @@ class MachineConfig:
                 "NNIK_GC_PEN_DOWN_DUTY": str(self.pen_duty(True) if pen else 0),
                 "NNIK_GC_TOOL_CS": "7" if self.tool == "servo" else "4",
                 "NNIK_GC_RULE": str(RULES.index(self.tool_rule)), "NNIK_GC_MARLIN": str(int(self.marlin)),
-                "NNIK_GC_M300_DOWN": f"{self.m300_down_max * 1000}L"}
+                "NNIK_GC_M300_DOWN": f"{self.m300_down_max * 1000}L",
+                **{f"NNIK_GC_{f.upper()}": str(int(f in self.features)) for f in sorted(FEATURES)}}
         if self.scale_q16 != SCALE_ONE or any(self.shift_um):
             out.update({"NNIK_GC_SCALE_Q16": f"{self.scale_q16}L", "NNIK_GC_SHIFT_X_UM": f"{self.shift_um[0]}L",
                         "NNIK_GC_SHIFT_Y_UM": f"{self.shift_um[1]}L"})

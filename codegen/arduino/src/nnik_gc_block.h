@@ -8,6 +8,21 @@
 #include <stdint.h>
 
 #include "nnik_gcode.h"
+#include "nnik_gcode_config.h"
+
+/* build options, as grbl's config.h (each one's flash cost: docs/firmware.md) */
+#ifndef NNIK_GC_G5
+#define NNIK_GC_G5 1     /* Marlin's G5 cubic Bezier */
+#endif
+#ifndef NNIK_GC_G93
+#define NNIK_GC_G93 1    /* G93 inverse time feed */
+#endif
+#ifndef NNIK_GC_PLANES
+#define NNIK_GC_PLANES 1 /* arcs in G18 and G19 */
+#endif
+#ifndef NNIK_GC_WCS
+#define NNIK_GC_WCS 1    /* G10 L2/L20, G55-G59, G28.1, G30.1 */
+#endif
 
 /* a decimal as written: [-]ip.fr with nd fraction digits (up to 9 + 6 digits) */
 typedef struct {

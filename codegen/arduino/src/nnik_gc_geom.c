@@ -1,6 +1,7 @@
 /* nnik_gc_geom.c - see nnik_gc_geom.h.  Every rounding is spelled out for the Python model. */
 #include "nnik_gc_geom.h"
 #include "nnik_gcode_config.h"
+#include "nnik_gc_block.h"
 #include "nnik_imath.h"
 
 #if NNIK_GC_SEG_UM < 100 || NNIK_GC_SEG_UM > 5000
@@ -88,36 +89,42 @@ void nnik_gc_arc(int32_t c0, int32_t c1, int32_t e0, int32_t e1, uint32_t r, uin
     }
 }
 
+#if NNIK_GC_G5
+/* w * d, |d| < 2^30, w < 2^31 */
+static int64_t wmul(uint32_t w, int32_t d)
+{
+    return (int64_t)w * d;
+}
+
 void nnik_gc_bezier(const int32_t p0[2], const int32_t c1[2], const int32_t c2[2], const int32_t p3[2],
                     nnik_gc_point_fn fn, void *ctx)
 {
-    int32_t d1[2], d2[2], d3[2], q[2], o[2];
-    uint32_t poly, n, k;
-    int64_t n3;
+    int32_t d[3][2], q[2];
+    uint32_t poly, n, k, n3;
     uint8_t a;
     for (a = 0; a < 2; a++) {
-        o[a] = p0[a]; /* p0 may be the caller's position, which fn moves */
-        d1[a] = c1[a] - p0[a];
-        d2[a] = c2[a] - p0[a];
-        d3[a] = p3[a] - p0[a];
+        q[a] = p0[a];
+        d[0][a] = c1[a] - p0[a];
+        d[1][a] = c2[a] - p0[a];
+        d[2][a] = p3[a] - p0[a];
     }
-    poly = nnik_isqrt64(nnik_sq2(d1[0], d1[1])) + nnik_isqrt64(nnik_sq2(c2[0] - c1[0], c2[1] - c1[1])) +
+    poly = nnik_isqrt64(nnik_sq2(d[0][0], d[0][1])) + nnik_isqrt64(nnik_sq2(c2[0] - c1[0], c2[1] - c1[1])) +
            nnik_isqrt64(nnik_sq2(p3[0] - c2[0], p3[1] - c2[1]));
     n = (poly + NNIK_GC_SEG_UM - 1) / NNIK_GC_SEG_UM;
     if (n < 1)
         n = 1;
     if (n > BEZIER_NMAX)
         n = BEZIER_NMAX;
-    n3 = (int64_t)n * n * n;
+    n3 = n * n * n;
     for (k = 1; k <= n; k++) {
-        int64_t u = (int64_t)(n - k), kk = (int64_t)k;
-        int64_t w1 = 3 * u * u * kk, w2 = 3 * u * kk * kk, w3 = kk * kk * kk;
-        for (a = 0; a < 2; a++) {
-            int64_t num = w1 * d1[a] + w2 * d2[a] + w3 * d3[a];
-            uint64_t un = num < 0 ? (uint64_t)(-num) : (uint64_t)num;
-            int64_t qq = (int64_t)((2 * un + (uint64_t)n3) / (2 * (uint64_t)n3));
-            q[a] = o[a] + (int32_t)(num < 0 ? -qq : qq);
-        }
-        fn(ctx, q);
+        uint32_t u = n - k, w[3];
+        int32_t out[2];
+        w[0] = 3 * u * u * k; /* each < 4 n^3 / 9 < 2^30 */
+        w[1] = 3 * u * k * k;
+        w[2] = k * k * k;
+        for (a = 0; a < 2; a++)
+            out[a] = q[a] + nnik_div_round(wmul(w[0], d[0][a]) + wmul(w[1], d[1][a]) + wmul(w[2], d[2][a]), n3);
+        fn(ctx, out);
     }
 }
+#endif

@@ -108,6 +108,10 @@ static int8_t gword(nnik_blk_t *b, const nnik_num_t *n)
         return 1;
     }
 #endif
+    /* words left out of this build */
+    if ((!NNIK_GC_G5 && c == 50) || (!NNIK_GC_G93 && c == 930) || (!NNIK_GC_PLANES && (c == 180 || c == 190)) ||
+        (!NNIK_GC_WCS && (c == 100 || c == 281 || c == 301 || (c >= 550 && c <= 590 && c % 10 == 0))))
+        return -20;
     switch (c) {
     case 0: case 10: case 20: case 30: case 50: SET(motion, c / 10); return 0;
     case 800: SET(motion, 80); return 0;

@@ -262,10 +262,40 @@ static void chord_end(void *ctx, const int32_t q[2])
     }
 }
 
+#if NNIK_GC_G93
+/* G93: the move takes 1/F minutes: feed = length * F (F in thousandths per minute) */
 static int32_t inverse_feed(uint32_t length, int32_t inv_f)
 {
-    int64_t f = (int64_t)length * inv_f / 1000;
-    return f < MIN_FEED ? MIN_FEED : (f > 0x7fffffffL ? 0x7fffffffL : (int32_t)f);
+    uint64_t f = (uint64_t)length * (uint32_t)inv_f / 1000;
+    return f < (uint64_t)MIN_FEED ? MIN_FEED : (f > 0x7fffffffUL ? 0x7fffffffL : (int32_t)f);
+}
+#endif
+
+/* the chord ends of an arc (about c, in the walk's plane) or a Bezier (c1 c2) to tgt */
+static void curve(nnik_gc_t *g, uint8_t motion, const int32_t c[2], const int32_t c1[2], const int32_t c2[2],
+                  const int32_t tgt[3], uint32_t rad, walk_t *w)
+{
+#if NNIK_GC_G5
+    if (motion == 5) {
+        int32_t p0[2];
+        p0[0] = g->mp[0];
+        p0[1] = g->mp[1];
+        w->c[0] = w->c[1] = 0;
+        nnik_gc_bezier(p0, c1, c2, tgt, chord_end, w);
+        return;
+    }
+#else
+    (void)c1;
+    (void)c2;
+#endif
+    nnik_gc_arc(g->mp[w->a0] - c[0], g->mp[w->a1] - c[1], tgt[w->a0] - c[0], tgt[w->a1] - c[1], rad, motion == 3,
+                chord_end, w);
+}
+
+/* the work offset of axis k in system wcs with the tool length offset tlo: machine = work + it */
+static int32_t woff(const nnik_gc_t *g, uint8_t wcs, int32_t tlo, uint8_t k)
+{
+    return g->coord[wcs][k] + g->g92[k] + (k == 2 ? tlo : 0);
 }
 
 /* ---------------------------------------------------------------- the line */
@@ -281,7 +311,7 @@ int8_t nnik_gc_exec(nnik_gc_t *g)
     uint8_t inch, rel, plane, arc_abs, inverse, wcs, motion, nm, k, axes = 0, moving, axis_nm, extrude = 0;
     uint8_t e_rel, e_move, seg_blocks;
     uint16_t used = (1U << W_F) | (1U << W_T) | (1U << W_S);
-    int32_t feed, inv_f = 0, tlo, tgt[3], e_tgt, dwell_ms = -1;
+    int32_t feed, inv_f = 0, tlo, tgt[3], av[3], e_tgt, dwell_ms = -1;
     int32_t c[2] = {0, 0}, c1[2] = {0, 0}, c2[2] = {0, 0};
     uint32_t rad = 0;
     uint32_t blk0;
@@ -354,13 +384,13 @@ int8_t nnik_gc_exec(nnik_gc_t *g)
         tgt[k] = g->mp[k];
         if (!(axes & (1U << k)))
             continue;
-        val = nnik_gc_um(V(W_X + k), inch);
+        val = av[k] = nnik_gc_um(V(W_X + k), inch);
         if (nm == NM_G53 || nm == NM_G92 || nm == NM_G10)
             tgt[k] = val;
         else if (rel)
             tgt[k] = g->mp[k] + val;
         else
-            tgt[k] = val + g->coord[wcs][k] + g->g92[k] + (k == 2 ? tlo : 0);
+            tgt[k] = val + woff(g, wcs, tlo, k);
         if (tgt[k] > POS_LIMIT || tgt[k] < -POS_LIMIT)
             return -33;
         used |= (uint16_t)(1U << (W_X + k));
@@ -397,6 +427,7 @@ int8_t nnik_gc_exec(nnik_gc_t *g)
         if (dwell_ms > DWELL_MS_MAX)
             dwell_ms = DWELL_MS_MAX;
     }
+#if NNIK_GC_WCS
     if (nm == NM_G10) {
         if (!HASW(W_L) || !HASW(W_P))
             return -28;
@@ -408,6 +439,7 @@ int8_t nnik_gc_exec(nnik_gc_t *g)
         if (!axes)
             return -26;
     }
+#endif
     if (nm == NM_G92 && !axes && !HASW(W_E))
         return -26;
     /* arcs and curves: checked before anything changes */
@@ -425,7 +457,7 @@ int8_t nnik_gc_exec(nnik_gc_t *g)
         uint32_t re;
         if (!(axes & ((1U << a0) | (1U << a1))))
             return -32;
-        if (plane && tgt[lin] != g->mp[lin])
+        if (NNIK_GC_PLANES && plane && tgt[lin] != g->mp[lin])
             return -20;
         x = tgt[a0] - g->mp[a0];
         y = tgt[a1] - g->mp[a1];
@@ -445,8 +477,8 @@ int8_t nnik_gc_exec(nnik_gc_t *g)
             off[0] = HASW(o0) ? nnik_gc_um(V(o0), inch) : 0;
             off[1] = HASW(o1) ? nnik_gc_um(V(o1), inch) : 0;
             if (arc_abs) {
-                off[0] += g->coord[wcs][a0] + g->g92[a0] + (a0 == 2 ? tlo : 0) - g->mp[a0];
-                off[1] += g->coord[wcs][a1] + g->g92[a1] + (a1 == 2 ? tlo : 0) - g->mp[a1];
+                off[0] += woff(g, wcs, tlo, a0) - g->mp[a0];
+                off[1] += woff(g, wcs, tlo, a1) - g->mp[a1];
             }
         }
         c[0] = g->mp[a0] + off[0];
@@ -465,9 +497,10 @@ int8_t nnik_gc_exec(nnik_gc_t *g)
             return -33;
         w.a0 = a0;
         w.a1 = a1;
-        w.per_point = plane != 0;
+        w.per_point = NNIK_GC_PLANES && plane != 0;
         w.c[0] = c[0];
         w.c[1] = c[1];
+#if NNIK_GC_G5
     } else if (moving && motion == 5) {
         if (plane)
             return -20;
@@ -488,6 +521,7 @@ int8_t nnik_gc_exec(nnik_gc_t *g)
         if (iabs32(c1[0]) > POS_LIMIT || iabs32(c1[1]) > POS_LIMIT || iabs32(c2[0]) > POS_LIMIT ||
             iabs32(c2[1]) > POS_LIMIT)
             return -33;
+#endif
     }
     if (b.have & (uint16_t)~used & (uint16_t)((1U << W_COUNT) - 1))
         return -36;
@@ -522,23 +556,24 @@ int8_t nnik_gc_exec(nnik_gc_t *g)
         uint32_t t = ms / 1000 * NNIK_GC_TICK_HZ + ms % 1000 * NNIK_GC_TICK_HZ / 1000;
         if (t && !g->check)
             rest(g, t, idle_tool(g));
+#if NNIK_GC_WCS
     } else if (nm == NM_G10) {
         uint8_t p = V(W_P)->ip ? (uint8_t)(V(W_P)->ip - 1) : g->wcs;
-        for (k = 0; k < 3; k++) {
-            if (axes & (1U << k)) {
-                int32_t val = nnik_gc_um(V(W_X + k), inch);
-                g->coord[p][k] = V(W_L)->ip == 2 ? val : g->mp[k] - g->g92[k] - (k == 2 ? g->tlo : 0) - val;
-            }
-        }
+        for (k = 0; k < 3; k++)
+            if (axes & (1U << k))
+                g->coord[p][k] = V(W_L)->ip == 2 ? av[k] : g->mp[k] - g->g92[k] - (k == 2 ? g->tlo : 0) - av[k];
+#endif
     } else if (nm == NM_G92) {
         for (k = 0; k < 3; k++)
             if (axes & (1U << k))
-                g->g92[k] = g->mp[k] - g->coord[g->wcs][k] - (k == 2 ? g->tlo : 0) - nnik_gc_um(V(W_X + k), inch);
+                g->g92[k] = g->mp[k] - g->coord[g->wcs][k] - (k == 2 ? g->tlo : 0) - av[k];
     } else if (nm == NM_G92_1) {
         g->g92[0] = g->g92[1] = g->g92[2] = 0;
+#if NNIK_GC_WCS
     } else if (nm == NM_G28_1 || nm == NM_G30_1) {
         for (k = 0; k < 3; k++)
             g->home[nm == NM_G30_1][k] = g->mp[k];
+#endif
     } else if (nm == NM_G28 || nm == NM_G30) {
         const int32_t *stored = g->home[nm == NM_G30];
         int32_t dest[3];
@@ -552,34 +587,28 @@ int8_t nnik_gc_exec(nnik_gc_t *g)
     if (!r && moving) {
         if (motion <= 1) {
             int32_t f = motion == 0 ? (int32_t)NNIK_GC_MAX_FEED_UM_MIN : g->feed;
+#if NNIK_GC_G93
             if (inv_f && motion)
                 f = inverse_feed(nnik_isqrt64(nnik_sq2(tgt[0] - g->mp[0], tgt[1] - g->mp[1])), inv_f);
+#endif
             r = line_to(g, tgt, f, motion == 0, extrude);
         } else {
             w.feed = g->feed;
+#if NNIK_GC_G93
             if (inv_f) { /* G93: the chords' length first */
                 w.measure = 1;
                 w.last[0] = g->mp[0];
                 w.last[1] = g->mp[1];
-                if (motion == 5)
-                    nnik_gc_bezier(g->mp, c1, c2, tgt, chord_end, &w);
-                else
-                    nnik_gc_arc(g->mp[w.a0] - c[0], g->mp[w.a1] - c[1], tgt[w.a0] - c[0], tgt[w.a1] - c[1], rad,
-                                motion == 3, chord_end, &w);
+                curve(g, motion, c, c1, c2, tgt, rad, &w);
                 w.measure = 0;
                 w.feed = inverse_feed(w.length, inv_f);
             }
+#endif
             if (!w.per_point) {
                 g->mp[2] = tgt[2];
                 g->tool = move_tool(g, 0, extrude);
             }
-            if (motion == 5) {
-                w.c[0] = w.c[1] = 0;
-                nnik_gc_bezier(g->mp, c1, c2, tgt, chord_end, &w);
-            } else {
-                nnik_gc_arc(g->mp[w.a0] - c[0], g->mp[w.a1] - c[1], tgt[w.a0] - c[0], tgt[w.a1] - c[1], rad,
-                            motion == 3, chord_end, &w);
-            }
+            curve(g, motion, c, c1, c2, tgt, rad, &w);
             g->mp[2] = tgt[2];
             r = w.err;
         }

@@ -88,7 +88,7 @@ static void on_uart(struct avr_irq_t *irq, uint32_t value, void *param)
     }
     out_line[out_len] = 0;
     out_len = 0;
-    banner = strncmp(out_line, "nnik ", 5) == 0;
+    banner = strncmp(out_line, "nnik ", 5) == 0 || strncmp(out_line, "Grbl ", 5) == 0;
     answer = strcmp(out_line, "ok") == 0 || strncmp(out_line, "error:", 6) == 0;
     if (answer && n_replies == n_lines)
         printf("D %llu %s\n", idle_fall, out_line);

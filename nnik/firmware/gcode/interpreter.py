@@ -47,6 +47,8 @@ class Interpreter:
         self.notes: dict[str, int] = {}
         self.last_wins = 0
         self.moves_on = self.moves_off = 0
+        self.features_used: set[str] = set()  # build options the job's words need
+        self.z_seen: list[int] = []  # the Z (work) of every move: a laser's focus, a pen's heights
 
     # ---- frames -----------------------------------------------------------------------------
     def wco(self, k: int, wcs: int | None = None, tlo: int | None = None) -> int:
@@ -138,7 +140,9 @@ class Interpreter:
             else:
                 if self.alarm:
                     raise GcodeLineError(9)
-                self._block(parse_block(rd.text, self.cfg.marlin, self.cfg.tool_rule == "m300"))
+                blk = parse_block(rd.text, self.cfg.marlin, self.cfg.tool_rule == "m300", self.cfg.features)
+                self.features_used |= blk.used
+                self._block(blk)
                 reply = "ok"
         except GcodeAlarm as exc:
             reply, self.last_error = f"ALARM:{exc.code}", str(exc)
@@ -361,6 +365,8 @@ class Interpreter:
             self._count(rapid)
 
     def _count(self, rapid: bool) -> None:
+        z = self.mp[2] - self.wco(2)
+        self.z_seen = [min(self.z_seen[0], z), max(self.z_seen[1], z)] if self.z_seen else [z, z]
         if self.tool != self.cfg.tool_off_duty and not rapid:
             self.moves_on += 1
         else:
@@ -371,7 +377,7 @@ class Interpreter:
 
     def _inverse_feed(self, length_um: int, inv_f: int) -> int:
         """G93: the move takes 1/F minutes: feed = length * F (F in thousandths per minute)."""
-        return max(length_um * inv_f // 1000, MIN_FEED)
+        return min(max(length_um * inv_f // 1000, MIN_FEED), (1 << 31) - 1)
 
     def _motion(self, motion: int, tgt: list[int], geom, extrude: bool, inv_f: int, b: Block) -> None:
         rapid = motion == 0

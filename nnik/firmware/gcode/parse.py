@@ -13,6 +13,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+from nnik.firmware.config import FEATURES
 from nnik.firmware.gcode.codes import GcodeLineError
 
 INT_DIGITS_MAX = 9
@@ -92,6 +93,7 @@ class Block:
     noted_line: str | None = None  # the whole line is noted (a printer or machine setup code)
     noted: list[str] = field(default_factory=list)  # codes noted on a line that runs
     last_wins: int = 0  # words that replaced an earlier word of their modal group
+    used: set = field(default_factory=set)  # the build options (FEATURE_CODES) its words need
 
 
 def scan_num(s: str, i: int) -> tuple[Num, int]:
@@ -126,7 +128,11 @@ def _set(b: Block, name: str, value) -> None:
     setattr(b, name, value)
 
 
-def _g(b: Block, n: Num, marlin: bool) -> None:
+FEATURE_CODES = {"g5": {50}, "g93": {930}, "planes": {180, 190}, "wcs": {100, 281, 301, 550, 560, 570, 580, 590}}
+assert set(FEATURE_CODES) == FEATURES
+
+
+def _g(b: Block, n: Num, marlin: bool, features=FEATURES) -> None:
     c = n.code10
     name = f"G{n.ip}" + (f".{c % 10}" if c % 10 else "")
     if n.neg:
@@ -134,6 +140,9 @@ def _g(b: Block, n: Num, marlin: bool) -> None:
     if n.nd > 1 and n.fr % 10 ** (n.nd - 1):
         raise GcodeLineError(23, f"G{n.ip}.{n.fr}")
     noted_line = G_MARLIN_NOTED_LINE if marlin else G_NOTED_LINE
+    off = next((f for f, codes in FEATURE_CODES.items() if c in codes and f not in features), None)
+    if off and c not in noted_line:
+        raise GcodeLineError(20, f"{name}: this build leaves out {off} (NNIK_GC_{off.upper()})")
     if c in noted_line:
         b.noted_line = noted_line[c]
     elif c in MOTION:
@@ -201,7 +210,7 @@ def _m(b: Block, n: Num, marlin: bool, m300_pen: bool) -> bool:
     return False
 
 
-def parse_block(s: str, marlin: bool = False, m300_pen: bool = False) -> Block:
+def parse_block(s: str, marlin: bool = False, m300_pen: bool = False, features=FEATURES) -> Block:
     """The words of a cleaned line (upper case, no blanks); GcodeLineError names what is wrong.
     marlin: E words, G4 P in ms, Marlin's setup G codes noted; m300_pen: M300 S moves a pen."""
     b = Block()
@@ -223,7 +232,8 @@ def parse_block(s: str, marlin: bool = False, m300_pen: bool = False) -> Block:
             continue
         n, i = scan_num(s, i)
         if letter == "G":
-            _g(b, n, marlin)
+            _g(b, n, marlin, features)
+            b.used |= {f for f, codes in FEATURE_CODES.items() if n.code10 in codes}
             if b.noted_line:
                 break
         elif letter == "M":
