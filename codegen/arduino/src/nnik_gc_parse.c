@@ -6,6 +6,7 @@
  * its arguments, and the line does nothing.
  */
 #include "nnik_gc_block.h"
+#include "nnik_flash.h"
 #include "nnik_gcode_config.h"
 
 #ifndef NNIK_GC_MARLIN
@@ -70,16 +71,58 @@ int32_t nnik_gc_um(const nnik_num_t *n, uint8_t inch)
 
 #define SET(field, val) (b->field = (uint8_t)(val))
 
+/* G codes (code10) and what each sets: field << 4 | value */
+enum { F_MOTION = 1, F_NONMODAL, F_PLANE, F_INCH, F_REL, F_ARC_ABS, F_INVERSE, F_WCS, F_TLO, F_QUIET, F_ERR };
+#define A(f, v) (uint8_t)((f) << 4 | (v))
+typedef struct {
+    uint16_t code;
+    uint8_t act;
+} gcode_t;
+static NNIK_FLASH const gcode_t G_TABLE[] = {
+    {0, A(F_MOTION, 0)}, {10, A(F_MOTION, 1)}, {20, A(F_MOTION, 2)}, {30, A(F_MOTION, 3)}, {50, A(F_MOTION, 5)},
+    {800, A(F_MOTION, 15)}, {40, A(F_NONMODAL, NM_G4)}, {100, A(F_NONMODAL, NM_G10)}, {280, A(F_NONMODAL, NM_G28)},
+    {281, A(F_NONMODAL, NM_G28_1)}, {300, A(F_NONMODAL, NM_G30)}, {301, A(F_NONMODAL, NM_G30_1)},
+    {530, A(F_NONMODAL, NM_G53)}, {920, A(F_NONMODAL, NM_G92)}, {921, A(F_NONMODAL, NM_G92_1)},
+    {170, A(F_PLANE, 0)}, {180, A(F_PLANE, 1)}, {190, A(F_PLANE, 2)}, {200, A(F_INCH, 1)}, {210, A(F_INCH, 0)},
+    {900, A(F_REL, 0)}, {910, A(F_REL, 1)}, {901, A(F_ARC_ABS, 1)}, {911, A(F_ARC_ABS, 0)}, {930, A(F_INVERSE, 1)},
+    {940, A(F_INVERSE, 0)}, {431, A(F_TLO, 1)}, {490, A(F_TLO, 0)}, {430, A(F_TLO, 2)}, {540, A(F_WCS, 0)},
+    {550, A(F_WCS, 1)}, {560, A(F_WCS, 2)}, {570, A(F_WCS, 3)}, {580, A(F_WCS, 4)}, {590, A(F_WCS, 5)},
+    {400, A(F_QUIET, 0)}, {610, A(F_QUIET, 0)}, {611, A(F_QUIET, 0)}, {690, A(F_QUIET, 0)}, {970, A(F_QUIET, 0)},
+    {980, A(F_QUIET, 0)}, {990, A(F_QUIET, 0)}, {150, A(F_QUIET, 0)}, {640, A(F_QUIET, 1)},
+    {310, A(F_ERR, 0)}, {382, A(F_ERR, 0)}, {383, A(F_ERR, 0)}, {384, A(F_ERR, 0)}, {385, A(F_ERR, 0)},
+    {591, A(F_ERR, 1)}, {592, A(F_ERR, 1)}, {593, A(F_ERR, 1)},
+};
+
+static int8_t set_field(nnik_blk_t *b, uint8_t f, uint8_t v)
+{
+    uint8_t *slot = 0;
+    switch (f) {
+    case F_MOTION: slot = &b->motion; v = v == 15 ? 80 : v; break;
+    case F_NONMODAL: slot = &b->nonmodal; break;
+    case F_PLANE: slot = &b->plane; break;
+    case F_INCH: slot = &b->inch; break;
+    case F_REL: slot = &b->relative; break;
+    case F_ARC_ABS: slot = &b->arc_abs; break;
+    case F_INVERSE: slot = &b->inverse; break;
+    case F_TLO: slot = &b->tlo; b->g43 |= v == 2; break;
+    case F_WCS: slot = &b->wcs; break;
+    case F_QUIET: b->g64 |= v; return 0;
+    default: return v ? -29 : -43; /* probing; G59.x */
+    }
+    *slot = v;
+    return 0;
+}
+
 /* a G word: 0, 1 (the line is noted: stop reading) or -N */
 static int8_t gword(nnik_blk_t *b, const nnik_num_t *n)
 {
     uint16_t c;
+    uint8_t k;
     uint8_t nd = NUM_ND(n);
     if (n->nd & NUM_NEG)
         return -20;
     if (nd > 1) {
         uint32_t p = 1;
-        uint8_t k;
         for (k = 1; k < nd; k++)
             p *= 10;
         if (n->fr % p)
@@ -90,7 +133,6 @@ static int8_t gword(nnik_blk_t *b, const nnik_num_t *n)
     c = (uint16_t)(n->ip * 10);
     if (nd) {
         uint32_t p = 1;
-        uint8_t k;
         for (k = 1; k < nd; k++)
             p *= 10;
         c = (uint16_t)(c + n->fr / p);
@@ -112,41 +154,17 @@ static int8_t gword(nnik_blk_t *b, const nnik_num_t *n)
     if ((!NNIK_GC_G5 && c == 50) || (!NNIK_GC_G93 && c == 930) || (!NNIK_GC_PLANES && (c == 180 || c == 190)) ||
         (!NNIK_GC_WCS && (c == 100 || c == 281 || c == 301 || (c >= 550 && c <= 590 && c % 10 == 0))))
         return -20;
-    switch (c) {
-    case 0: case 10: case 20: case 30: case 50: SET(motion, c / 10); return 0;
-    case 800: SET(motion, 80); return 0;
-    case 40: SET(nonmodal, NM_G4); return 0;
-    case 100: SET(nonmodal, NM_G10); return 0;
-    case 280: SET(nonmodal, NM_G28); return 0;
-    case 281: SET(nonmodal, NM_G28_1); return 0;
-    case 300: SET(nonmodal, NM_G30); return 0;
-    case 301: SET(nonmodal, NM_G30_1); return 0;
-    case 530: SET(nonmodal, NM_G53); return 0;
-    case 920: SET(nonmodal, NM_G92); return 0;
-    case 921: SET(nonmodal, NM_G92_1); return 0;
-    case 170: case 180: case 190: SET(plane, (c - 170) / 10); return 0;
-    case 200: case 210: SET(inch, c == 200); return 0;
-    case 900: case 910: SET(relative, c == 910); return 0;
-    case 901: case 911: SET(arc_abs, c == 901); return 0;
-    case 930: case 940: SET(inverse, c == 930); return 0;
-    case 431: SET(tlo, 1); return 0;
-    case 490: SET(tlo, 0); return 0;
-    case 430: SET(tlo, 2); b->g43 = 1; return 0;
-    case 540: case 550: case 560: case 570: case 580: case 590: SET(wcs, (c - 540) / 10); return 0;
-    case 400: case 610: return 0;                                  /* grbl's own, nothing to do */
-    case 611: case 690: case 970: case 980: case 990: case 150: return 0; /* noted */
-    case 640: b->g64 = 1; return 0;
-    case 310: case 382: case 383: case 384: case 385: return -43;  /* probing */
-    case 591: case 592: case 593: return -29;
+    for (k = 0; k < sizeof G_TABLE / sizeof G_TABLE[0]; k++) {
+        uint8_t act;
+        if (NNIK_RD_U16(&G_TABLE[k].code) != c)
+            continue;
+        act = NNIK_RD_U8(&G_TABLE[k].act);
+        return set_field(b, act >> 4, act & 15);
     }
-    if (c % 10) {
-        switch (c - c % 10) {
-        case 0: case 10: case 20: case 30: case 50: case 800: case 40: case 100: case 280: case 300: case 530:
-        case 920: case 170: case 180: case 190: case 200: case 210: case 900: case 910: case 930: case 940:
-        case 540: case 550: case 560: case 570: case 580: case 590:
-            return -23;
-        }
-    }
+    if (c % 10) /* a decimal of a code that has none */
+        for (k = 0; k < sizeof G_TABLE / sizeof G_TABLE[0]; k++)
+            if (NNIK_RD_U16(&G_TABLE[k].code) == c - c % 10 && NNIK_RD_U8(&G_TABLE[k].act) < (F_TLO << 4))
+                return -23;
     return -20; /* canned cycles, cutter compensation, rotation, scaling, polar, lathe modes, ... */
 }
 

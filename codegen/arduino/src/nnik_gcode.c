@@ -300,6 +300,9 @@ static int32_t woff(const nnik_gc_t *g, uint8_t wcs, int32_t tlo, uint8_t k)
 
 /* ---------------------------------------------------------------- the line */
 #define V(w) (&b.v[w])
+/* letters read in the block's units (inches after G20): lengths and F */
+#define LENGTHS ((1U << W_E) | (1U << W_F) | (1U << W_I) | (1U << W_J) | (1U << W_K) | (1U << W_Q) | (1U << W_R) | \
+                 (1U << W_X) | (1U << W_Y) | (1U << W_Z))
 #define HASW(w) HAS(&b, w)
 
 static const uint8_t PLANE_AXES[3][2] = {{0, 1}, {2, 0}, {1, 2}};
@@ -311,7 +314,7 @@ int8_t nnik_gc_exec(nnik_gc_t *g)
     uint8_t inch, rel, plane, arc_abs, inverse, wcs, motion, nm, k, axes = 0, moving, axis_nm, extrude = 0;
     uint8_t e_rel, e_move, seg_blocks;
     uint16_t used = (1U << W_F) | (1U << W_T) | (1U << W_S);
-    int32_t feed, inv_f = 0, tlo, tgt[3], av[3], e_tgt, dwell_ms = -1;
+    int32_t feed, inv_f = 0, tlo, tgt[3], u[W_COUNT], e_tgt, dwell_ms = -1;
     int32_t c[2] = {0, 0}, c1[2] = {0, 0}, c2[2] = {0, 0};
     uint32_t rad = 0;
     uint32_t blk0;
@@ -329,6 +332,9 @@ int8_t nnik_gc_exec(nnik_gc_t *g)
     if (HASW(W_T) && V(W_T)->ip > 255)
         return -38;
     inch = b.inch == UNSET ? g->inch : b.inch;
+    for (k = 0; k < W_COUNT; k++) /* every value once: lengths (and F, P of G5) in the block's units */
+        if (HASW(k))
+            u[k] = nnik_gc_um(V(k), inch && ((1U << k) & LENGTHS));
     rel = b.relative == UNSET ? g->relative : b.relative;
     plane = b.plane == UNSET ? g->plane : b.plane;
     arc_abs = b.arc_abs == UNSET ? g->arc_abs : b.arc_abs;
@@ -346,7 +352,7 @@ int8_t nnik_gc_exec(nnik_gc_t *g)
     if (b.tlo == 1) {
         if (!HASW(W_Z))
             return -37;
-        tlo = nnik_gc_um(V(W_Z), inch);
+        tlo = u[W_Z];
         used |= 1U << W_Z;
         axes &= (uint8_t)~4U;
     } else if (b.tlo == 0) {
@@ -369,7 +375,7 @@ int8_t nnik_gc_exec(nnik_gc_t *g)
             if (inv_f < 1)
                 return -22;
         } else {
-            feed = nnik_gc_um(V(W_F), inch);
+            feed = u[W_F];
             if (feed < MIN_FEED)
                 return -22;
         }
@@ -384,7 +390,7 @@ int8_t nnik_gc_exec(nnik_gc_t *g)
         tgt[k] = g->mp[k];
         if (!(axes & (1U << k)))
             continue;
-        val = av[k] = nnik_gc_um(V(W_X + k), inch);
+        val = u[W_X + k];
         if (nm == NM_G53 || nm == NM_G92 || nm == NM_G10)
             tgt[k] = val;
         else if (rel)
@@ -401,7 +407,7 @@ int8_t nnik_gc_exec(nnik_gc_t *g)
         e_rel = b.relative;
     e_tgt = g->e;
     if (HASW(W_E)) {
-        int32_t ev = nnik_gc_um(V(W_E), inch);
+        int32_t ev = u[W_E];
         used |= 1U << W_E;
         if (ev > POS_LIMIT || ev < -POS_LIMIT)
             return -33;
@@ -415,7 +421,7 @@ int8_t nnik_gc_exec(nnik_gc_t *g)
     /* checks of the non-modal commands */
     if (nm == NM_G4) {
         if (NNIK_GC_MARLIN && HASW(W_S) && !HASW(W_P)) {
-            dwell_ms = nnik_gc_um(V(W_S), 0);
+            dwell_ms = u[W_S];
         } else if (HASW(W_P)) {
             dwell_ms = nnik_gc_um(V(W_P), 0);
             if (NNIK_GC_MARLIN)
@@ -462,7 +468,7 @@ int8_t nnik_gc_exec(nnik_gc_t *g)
         x = tgt[a0] - g->mp[a0];
         y = tgt[a1] - g->mp[a1];
         if (HASW(W_R)) {
-            int32_t rr = nnik_gc_um(V(W_R), inch);
+            int32_t rr = u[W_R];
             used |= 1U << W_R;
             if (rr == 0)
                 return -33;
@@ -474,8 +480,8 @@ int8_t nnik_gc_exec(nnik_gc_t *g)
             if (!HASW(o0) && !HASW(o1))
                 return -35;
             used |= (uint16_t)((1U << o0) | (1U << o1));
-            off[0] = HASW(o0) ? nnik_gc_um(V(o0), inch) : 0;
-            off[1] = HASW(o1) ? nnik_gc_um(V(o1), inch) : 0;
+            off[0] = HASW(o0) ? u[o0] : 0;
+            off[1] = HASW(o1) ? u[o1] : 0;
             if (arc_abs) {
                 off[0] += woff(g, wcs, tlo, a0) - g->mp[a0];
                 off[1] += woff(g, wcs, tlo, a1) - g->mp[a1];
@@ -508,8 +514,8 @@ int8_t nnik_gc_exec(nnik_gc_t *g)
             return -28;
         used |= (1U << W_I) | (1U << W_J) | (1U << W_P) | (1U << W_Q);
         if (HASW(W_I) || HASW(W_J)) {
-            c1[0] = g->mp[0] + (HASW(W_I) ? nnik_gc_um(V(W_I), inch) : 0);
-            c1[1] = g->mp[1] + (HASW(W_J) ? nnik_gc_um(V(W_J), inch) : 0);
+            c1[0] = g->mp[0] + (HASW(W_I) ? u[W_I] : 0);
+            c1[1] = g->mp[1] + (HASW(W_J) ? u[W_J] : 0);
         } else if (g->motion == 5 && g->bez_ok) {
             c1[0] = 2 * g->mp[0] - g->bez[0];
             c1[1] = 2 * g->mp[1] - g->bez[1];
@@ -517,7 +523,7 @@ int8_t nnik_gc_exec(nnik_gc_t *g)
             return -28;
         }
         c2[0] = tgt[0] + nnik_gc_um(V(W_P), inch);
-        c2[1] = tgt[1] + nnik_gc_um(V(W_Q), inch);
+        c2[1] = tgt[1] + u[W_Q];
         if (iabs32(c1[0]) > POS_LIMIT || iabs32(c1[1]) > POS_LIMIT || iabs32(c2[0]) > POS_LIMIT ||
             iabs32(c2[1]) > POS_LIMIT)
             return -33;
@@ -530,7 +536,7 @@ int8_t nnik_gc_exec(nnik_gc_t *g)
     if (HASW(W_F) && !inverse)
         g->feed = feed;
     if (HASW(W_S) && !b.m300 && !(nm == NM_G4 && NNIK_GC_MARLIN && !HASW(W_P)))
-        g->s = nnik_gc_um(V(W_S), 0);
+        g->s = u[W_S];
     if (HASW(W_T))
         g->tool_no = (uint8_t)V(W_T)->ip;
     if (b.spindle != UNSET)
@@ -538,7 +544,7 @@ int8_t nnik_gc_exec(nnik_gc_t *g)
     if (b.coolant != UNSET)
         g->coolant = b.coolant == 9 ? 0 : (uint8_t)(g->coolant | (1U << (b.coolant - 7)));
     if (b.m300)
-        g->pen = nnik_gc_um(V(W_S), 0) <= NNIK_GC_M300_DOWN;
+        g->pen = u[W_S] <= NNIK_GC_M300_DOWN;
     g->plane = plane;
     g->inch = inch;
     g->relative = rel;
@@ -561,12 +567,12 @@ int8_t nnik_gc_exec(nnik_gc_t *g)
         uint8_t p = V(W_P)->ip ? (uint8_t)(V(W_P)->ip - 1) : g->wcs;
         for (k = 0; k < 3; k++)
             if (axes & (1U << k))
-                g->coord[p][k] = V(W_L)->ip == 2 ? av[k] : g->mp[k] - g->g92[k] - (k == 2 ? g->tlo : 0) - av[k];
+                g->coord[p][k] = V(W_L)->ip == 2 ? u[W_X + k] : g->mp[k] - g->g92[k] - (k == 2 ? g->tlo : 0) - u[W_X + k];
 #endif
     } else if (nm == NM_G92) {
         for (k = 0; k < 3; k++)
             if (axes & (1U << k))
-                g->g92[k] = g->mp[k] - g->coord[g->wcs][k] - (k == 2 ? g->tlo : 0) - av[k];
+                g->g92[k] = g->mp[k] - g->coord[g->wcs][k] - (k == 2 ? g->tlo : 0) - u[W_X + k];
     } else if (nm == NM_G92_1) {
         g->g92[0] = g->g92[1] = g->g92[2] = 0;
 #if NNIK_GC_WCS

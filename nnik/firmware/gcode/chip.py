@@ -28,7 +28,7 @@ CLOCK_HZ = 16_000_000
 FLASH_BYTES = 32 * 1024 - 512  # the Uno's optiboot takes 512 B
 RAM_BYTES = 2048
 COMMON = [f"-mmcu={MCU}", f"-DF_CPU={CLOCK_HZ}L", "-DARDUINO=10807", "-DARDUINO_AVR_UNO", "-DARDUINO_ARCH_AVR",
-          "-Os", "-g0", "-ffunction-sections", "-fdata-sections", "-Wall"]
+          "-Os", "-g0", "-ffunction-sections", "-fdata-sections", "-mcall-prologues", "-Wall"]
 C_FLAGS = ["-std=gnu11"]
 # Debian's avr-gcc 5.4 <float.h> defines DECIMAL_DIG for C only; WString.cpp needs it in C++
 CXX_FLAGS = ["-std=gnu++11", "-fpermissive", "-fno-exceptions", "-fno-threadsafe-statics",
