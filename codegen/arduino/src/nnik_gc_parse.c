@@ -46,7 +46,7 @@ static const char *scan(const char *s, nnik_num_t *n, int8_t *err)
     }
     n->nd |= nd;
     if (!digits)
-        *err = -2;
+        *err = *s == '#' || *s == '[' ? -41 : -2;
     return s;
 }
 

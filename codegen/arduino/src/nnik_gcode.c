@@ -367,6 +367,8 @@ int8_t nnik_gc_exec(nnik_gc_t *g)
     moving = (axes || e_move) && !axis_nm;
     if (moving && motion == 80)
         return -31;
+    if ((b.motion == 2 || b.motion == 3) && !axis_nm && !axes) /* an arc written without its end */
+        return -32;
     /* feed */
     feed = g->feed;
     if (HASW(W_F)) {

@@ -197,6 +197,8 @@ class Interpreter:
         moving = bool(axes or e_move) and not axis_nm
         if moving and motion == 80:
             raise GcodeLineError(31)
+        if b.motion in (2, 3) and not axis_nm and not axes:  # an arc written without its end
+            raise GcodeLineError(32)
         # feed
         feed, inv_f = self.feed, 0
         if "F" in v:

@@ -118,6 +118,8 @@ def scan_num(s: str, i: int) -> tuple[Num, int]:
             i += 1
             digits += 1
     if not digits:
+        if i < len(s) and s[i] in "#[":
+            raise GcodeLineError(41, s[i])
         raise GcodeLineError(2)
     return Num(neg, ip, fr, nd), i
 

@@ -11,6 +11,7 @@ comment ends the line with Marlin's checksum, the XOR of every byte before the `
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass
 
 LINE_MAX = 79  # grbl's 80-byte line buffer
@@ -83,8 +84,9 @@ def read_line(data: bytes) -> ReadLine:
 
 
 def split_lines(data: bytes) -> list[bytes]:
-    """A file's lines: LF, CRLF or CR alone end a line; the last line needs no end."""
-    lines = data.replace(b"\r\n", b"\n").replace(b"\r", b"\n").split(b"\n")
+    """A file's lines: LF, CRLF (or CR CR LF, as some CAM posts write) or CR alone end a line; the
+    last line needs no end."""
+    lines = re.sub(rb"\r+\n", b"\n", data).replace(b"\r", b"\n").split(b"\n")
     if lines and lines[-1] == b"":
         lines.pop()
     return lines
