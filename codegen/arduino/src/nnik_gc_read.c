@@ -4,11 +4,12 @@
  * >= 0x80 never reach it; blanks, control characters and '/' are dropped; '(' to the first ')'
  * and ';' to the end are comments; lower case is raised; 79 characters fit, more is error 11.
  * A '%' line is a program delimiter (ignored); '*nn' outside a comment ends the line with
- * Marlin's checksum, the XOR of every byte before the '*' (error 39 malformed, 40 wrong).
+ * Marlin's checksum, the XOR of every byte before the '*' (error 39 malformed, 40 wrong); a ';'
+ * comment may follow it.
  */
 #include "nnik_gcode.h"
 
-enum { RD_WORDS, RD_PAREN, RD_SEMI, RD_SUM, RD_PERCENT };
+enum { RD_WORDS, RD_PAREN, RD_SEMI, RD_SUM, RD_PERCENT, RD_SUM_END };
 
 void nnik_gc_read_reset(nnik_gc_t *g);
 void nnik_gc_read_reset(nnik_gc_t *g)
@@ -23,8 +24,12 @@ void nnik_gc_byte(nnik_gc_t *g, uint8_t c)
 {
     if (c >= 0x80 || c == '?' || c == '!' || c == '~' || c == 0x18)
         return;
+    if (g->rd_mode == RD_SUM_END) /* a ';' comment after the checksum */
+        return;
     if (g->rd_mode == RD_SUM) {
-        if (c >= '0' && c <= '9' && !g->rd_sum_blank) {
+        if (c == ';') {
+            g->rd_mode = RD_SUM_END;
+        } else if (c >= '0' && c <= '9' && !g->rd_sum_blank) {
             if (++g->rd_sum_digits > 3)
                 g->rd_sum_bad = 1;
             else
@@ -65,9 +70,9 @@ int8_t nnik_gc_eol(nnik_gc_t *g)
     int8_t r;
     g->line_no++;
     g->line[g->len] = 0;
-    if (g->rd_mode == RD_SUM && (g->rd_sum_bad || !g->rd_sum_digits || g->rd_sum > 255))
+    if (g->rd_mode >= RD_SUM && g->rd_mode != RD_PERCENT && (g->rd_sum_bad || !g->rd_sum_digits || g->rd_sum > 255))
         r = -39;
-    else if (g->rd_mode == RD_SUM && g->rd_sum != g->rd_xor)
+    else if (g->rd_mode >= RD_SUM && g->rd_mode != RD_PERCENT && g->rd_sum != g->rd_xor)
         r = -40;
     else if (g->rd_over)
         r = -11;

@@ -428,6 +428,8 @@ int8_t nnik_gc_exec(nnik_gc_t *g)
             dwell_ms = nnik_gc_um(V(W_P), 0);
             if (NNIK_GC_MARLIN)
                 dwell_ms = (dwell_ms + 500) / 1000;
+        } else if (NNIK_GC_MARLIN) {
+            dwell_ms = 0; /* Marlin: G4 alone waits for nothing */
         } else {
             return -28;
         }

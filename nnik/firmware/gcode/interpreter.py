@@ -252,6 +252,8 @@ class Interpreter:
             elif "P" in v:
                 p = v["P"].to_um(False)
                 dwell_ms = (p + 500) // 1000 if marlin else p
+            elif marlin:
+                dwell_ms = 0  # Marlin: G4 alone waits for nothing
             else:
                 raise GcodeLineError(28, "G4 needs P")
             used.add("P")

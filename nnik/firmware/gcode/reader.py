@@ -35,13 +35,17 @@ class ReadLine:
 def read_line(data: bytes) -> ReadLine:
     """One line's bytes (after ``sendable``, without its end) through the reader."""
     out: list[str] = []
-    mode = 0  # 0 words, 1 '(' comment, 2 ';' comment, 3 checksum digits, 4 a '%' line
+    mode = 0  # 0 words, 1 '(' comment, 2 ';' comment, 3 checksum digits, 4 a '%' line, 5 after the checksum
     over = x = 0
     total = digits = 0
     blank_after = bad = False
     for c in data:
+        if mode == 5:  # a comment after the checksum
+            continue
         if mode == 3:
-            if 48 <= c <= 57 and not blank_after:
+            if c == 59:  # ';': a comment after the checksum
+                mode = 5
+            elif 48 <= c <= 57 and not blank_after:
                 total = total * 10 + c - 48
                 digits += 1
                 bad = bad or digits > 3
@@ -70,7 +74,7 @@ def read_line(data: bytes) -> ReadLine:
             over = 1
         else:
             out.append(chr(c - 32) if 97 <= c <= 122 else chr(c))
-    if mode == 3:
+    if mode in (3, 5):
         if bad or not digits or total > 255:
             return ReadLine(ERROR, code=39)
         if total != x:
