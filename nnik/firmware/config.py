@@ -18,6 +18,10 @@ TOOLS = ("laser", "pen", "servo", "spindle", "knife", "none")
 RULES = ("s", "z", "e", "m300", "none")
 SCALE_ONE = 1 << 16
 FEATURES = frozenset({"g5", "g93", "planes", "wcs"})
+# the Uno's default build: grbl's own coordinate systems and planes; G93 (1.1 kB) and G5 (2.2 kB) are
+# left out (each line that needs one: error 20), as grbl's config.h leaves out what does not fit;
+# a job's build carries exactly what its file uses, and the ATmega2560 build carries everything
+UNO_FEATURES = frozenset({"wcs", "planes"})
 SHAPER_KINDS = ("none", "zv", "mzv", "zvd", "ei")
 SHAPER_RAM_BUDGET = 512  # bytes of SRAM the shaper's buffers may take on the ATmega328
 MIN_FEED_UM_MIN = 1000
@@ -230,7 +234,7 @@ def default_machine(scn, shaper: str | None = None) -> MachineConfig:
     um = lambda key, default, k=1000.0: int(round(float(mo.get(key, default)) * k))  # noqa: E731
     origin = tuple(int(v) for v in (lo + hi) // 2)
     bounds = tuple(tuple(int(v) - o for v, o in zip(e, origin)) for e in (lo, hi))
-    return MachineConfig(origin_um=origin, tool=kind, bounds_um=bounds,
+    return MachineConfig(origin_um=origin, tool=kind, bounds_um=bounds, features=UNO_FEATURES,
                          accel_um_s2=(um("accel_x_mm_s2", 1000.0), um("accel_y_mm_s2", 1000.0)),
                          junction_dev_um=um("junction_deviation_mm", 0.01), max_feed_um_min=um("max_feed_mm_min", 3000.0),
                          sample_hz=sample_hz, shaper=sh, shaper_taps=taps, **tool)

@@ -40,6 +40,12 @@
 #define OFF_DUTY 0
 #endif
 
+#if defined(__GNUC__)
+#define NOINLINE __attribute__((noinline))
+#else
+#define NOINLINE
+#endif
+
 static int32_t iabs32(int32_t v) { return v < 0 ? -v : v; }
 
 void nnik_gc_read_reset(nnik_gc_t *g);
@@ -115,7 +121,7 @@ void nnik_gc_flush(nnik_gc_t *g)
 }
 
 /* a segment without steps, once the planned motion is at rest */
-static void rest(nnik_gc_t *g, uint32_t ticks, uint16_t t)
+NOINLINE static void rest(nnik_gc_t *g, uint32_t ticks, uint16_t t)
 {
     int32_t d[2] = {0, 0};
     nnik_gc_flush(g);
@@ -126,7 +132,7 @@ static void rest(nnik_gc_t *g, uint32_t ticks, uint16_t t)
 }
 
 /* a block to the machine point p (X, Y): the transform, the soft limits, the planner */
-static int8_t push(nnik_gc_t *g, const int32_t p[2], int32_t feed)
+NOINLINE static int8_t push(nnik_gc_t *g, const int32_t p[2], int32_t feed)
 {
     int32_t e[2];
     e[0] = p[0];
@@ -159,7 +165,7 @@ static int32_t work_z(const nnik_gc_t *g)
 }
 #endif
 
-static uint16_t idle_tool(const nnik_gc_t *g)
+NOINLINE static uint16_t idle_tool(const nnik_gc_t *g)
 {
 #if NNIK_GC_TOOL == 1
 #if NNIK_GC_RULE == 1
@@ -178,7 +184,7 @@ static uint16_t idle_tool(const nnik_gc_t *g)
 #endif
 }
 
-static uint16_t move_tool(const nnik_gc_t *g, uint8_t rapid, uint8_t extrude)
+NOINLINE static uint16_t move_tool(const nnik_gc_t *g, uint8_t rapid, uint8_t extrude)
 {
 #if NNIK_GC_RULE == 2
     (void)g;
@@ -208,7 +214,7 @@ static uint16_t move_tool(const nnik_gc_t *g, uint8_t rapid, uint8_t extrude)
 }
 
 /* ---------------------------------------------------------------- moves */
-static int8_t line_to(nnik_gc_t *g, const int32_t t[3], int32_t feed, uint8_t rapid, uint8_t extrude)
+NOINLINE static int8_t line_to(nnik_gc_t *g, const int32_t t[3], int32_t feed, uint8_t rapid, uint8_t extrude)
 {
     g->mp[2] = t[2];
     g->tool = move_tool(g, rapid, extrude);
@@ -272,7 +278,7 @@ static int32_t inverse_feed(uint32_t length, int32_t inv_f)
 #endif
 
 /* the chord ends of an arc (about c, in the walk's plane) or a Bezier (c1 c2) to tgt */
-static void curve(nnik_gc_t *g, uint8_t motion, const int32_t c[2], const int32_t c1[2], const int32_t c2[2],
+NOINLINE static void curve(nnik_gc_t *g, uint8_t motion, const int32_t c[2], const int32_t c1[2], const int32_t c2[2],
                   const int32_t tgt[3], uint32_t rad, walk_t *w)
 {
 #if NNIK_GC_G5
@@ -293,7 +299,7 @@ static void curve(nnik_gc_t *g, uint8_t motion, const int32_t c[2], const int32_
 }
 
 /* the work offset of axis k in system wcs with the tool length offset tlo: machine = work + it */
-static int32_t woff(const nnik_gc_t *g, uint8_t wcs, int32_t tlo, uint8_t k)
+NOINLINE static int32_t woff(const nnik_gc_t *g, uint8_t wcs, int32_t tlo, uint8_t k)
 {
     return g->coord[wcs][k] + g->g92[k] + (k == 2 ? tlo : 0);
 }

@@ -12,7 +12,7 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 from nnik.errors import NnikError
-from nnik.firmware.config import SCALE_ONE, TOOLS, MachineConfig
+from nnik.firmware.config import FEATURES, SCALE_ONE, TOOLS, MachineConfig
 from nnik.firmware.gcode import fit as fitting
 from nnik.firmware.gcode.flavour import FLAVOURS, choose_rule, detect, scan
 from nnik.firmware.gcode.interpreter import Interpreter
@@ -108,7 +108,8 @@ def prepare(lines: list[bytes], cfg: MachineConfig, opts: JobOptions, source: st
     rule, why = (opts.tool_rule, "--tool-rule") if opts.tool_rule else choose_rule(cfg.tool, flavour, facts)
     bounds = cfg.bounds_um
     try:
-        first = replace(cfg, rule=rule, marlin=flavour == "marlin", bounds_um=None, scale_q16=SCALE_ONE, shift_um=(0, 0))
+        first = replace(cfg, rule=rule, marlin=flavour == "marlin", bounds_um=None, scale_q16=SCALE_ONE, shift_um=(0, 0),
+                        features=FEATURES)
     except ValueError as exc:
         raise NnikError(str(exc), None, "--tool-rule" if opts.tool_rule else "--tool") from None
     it, sent, dollars = _interpret(lines, first, source)
@@ -125,7 +126,9 @@ def prepare(lines: list[bytes], cfg: MachineConfig, opts: JobOptions, source: st
     if bounds is not None and ext is not None and not fitting.inside([frame.apply(p) for p in ends], bounds):
         moved = fitting.extent([frame.apply(p) for p in ends])
         raise NnikError(f"{source}: {fitting.refusal(moved, bounds, cfg.origin_um)}")
-    final = replace(first, scale_q16=frame.scale_q16, shift_um=frame.shift_um, bounds_um=bounds)
+    # the chip's build carries the options this file uses, no more (each one's flash: docs/firmware.md)
+    final = replace(first, scale_q16=frame.scale_q16, shift_um=frame.shift_um, bounds_um=bounds,
+                    features=frozenset(it.features_used))
     z = [m for m in (it.z_seen or [0])]
     summary = {
         "flavour": flavour, "flavour_evidence": evidence, "tool": final.tool, "tool_rule": rule, "tool_rule_why": why,
@@ -134,5 +137,6 @@ def prepare(lines: list[bytes], cfg: MachineConfig, opts: JobOptions, source: st
         "extent_mm": None if ext is None else [[v / 1000 for v in ext[0]], [v / 1000 for v in ext[1]]],
         "noted": dict(sorted(it.notes.items())), "dollar_lines": dollars, "last_word_wins": it.last_wins,
         "z_range_mm": [min(z) / 1000, max(z) / 1000], "lines": len(lines), "lines_sent": len(sent),
+        "build_options": sorted(it.features_used),
     }
     return Prepared([lines[k - 1] for k in sent], sent, final, summary)
