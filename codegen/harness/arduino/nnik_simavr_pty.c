@@ -17,8 +17,9 @@
  *     T <cycle> <duty>         the tool's PWM (Timer2 OCR2A) changed
  *     Z <cycle>                the chip was reset: a program opened the terminal (below)
  *     E <cycle> <state> 0      the end: "stopped" (SIGTERM/SIGINT), "timeout", "halted", "crashed"
- * A program opening the terminal resets the chip 0.2 s later, as opening a real Uno's USB port
- * does (DTR): the sender then reads the banner, whatever it flushed on opening.
+ * The chip starts 0.2 s after a program first opens the terminal, and a program opening it again
+ * resets it 0.2 s later, as opening a real Uno's USB port does (DTR): the sender then reads the
+ * banner, whatever it flushed on opening.
  *   MAX_SECONDS  simulated seconds before the end (0 or absent: none)
  *   SPEED        simulated seconds per wall second at most (default 1: real time; 0: unpaced)
  *   LINK         a symlink to the terminal to create (and remove at the end)
@@ -197,6 +198,7 @@ int main(int argc, char **argv)
     uint32_t flags = 0;
     int slave, i, rc, watch_fd;
     double reset_at = -1;
+    int started = 0;
 
     if (argc < 3 || argc > 6) {
         fprintf(stderr, "usage: %s FIRMWARE.elf EVENTS_FILE [MAX_SECONDS [SPEED [LINK]]]\n", argv[0]);
@@ -262,12 +264,17 @@ int main(int argc, char **argv)
     t0 = wall_now();
     while (!stop) {
         unsigned long long end = avr->cycle + SLICE_CYCLES;
-        while (avr->cycle < end) {
+        while (started && avr->cycle < end) {
             rc = avr_run(avr);
             if (rc == cpu_Done || rc == cpu_Crashed) {
                 state = rc == cpu_Done ? "halted" : "crashed";
                 goto out;
             }
+        }
+        if (!started) { /* no program has opened the terminal yet: the chip waits in reset */
+            struct timespec ts = {0, 1000000};
+            nanosleep(&ts, NULL);
+            t0 = wall_now() - (double)avr->cycle / CLOCK_HZ / (speed > 0 ? speed : 1);
         }
         exchange();
         if (watch_fd >= 0) {
@@ -275,7 +282,10 @@ int main(int argc, char **argv)
             if (read(watch_fd, evbuf, sizeof evbuf) > 0) /* opened: reset as DTR would, shortly */
                 reset_at = wall_now() + 0.2;
         }
-        if (reset_at > 0 && wall_now() >= reset_at) {
+        if (reset_at > 0 && wall_now() >= reset_at && !started) {
+            reset_at = -1;
+            started = 1;
+        } else if (reset_at > 0 && wall_now() >= reset_at) {
             reset_at = -1;
             avr_reset(avr);
             xoff = 0;
