@@ -7,7 +7,6 @@
 
 #include "nnik_gc_shim.h"
 #include "nnik_gcode_config.h"
-#include "nnik_flash.h"
 
 #ifdef NNIK_GC_SHIM
 
@@ -37,22 +36,17 @@ void nnik_gc_byte(nnik_gc_t *g, uint8_t c)
     }
 }
 
-/* today's messages -> grbl's error numbers (first characters of the message) */
+/* today's messages -> grbl's error numbers: a rough map (the rewritten engine gives grbl's own) */
 static int8_t code_of(const char *m)
 {
-    static NNIK_FLASH const struct { char p[6]; int8_t code; } map[] = {
-        {"line t", 11}, {"bad nu", 2}, {"number", 2}, {"too ma", 2}, {"repeat", 25}, {"two mo", 21},
-        {"two no", 21}, {"two to", 21}, {"unexpe", 1}, {"feed b", 22}, {"negati", 4}, {"arc ch", 33},
-        {"R arc ", 33}, {"arc en", 33}, {"arc ra", 33}, {"arc ne", 35}, {"arc wi", 33}, {"coordi", 33},
-        {"G4 nee", 28}, {"P need", 36}, {"I/J ne", 36}, {"R need", 36},
-    };
-    uint8_t i, k;
-    for (i = 0; i < sizeof map / sizeof map[0]; i++) {
-        for (k = 0; k < 6 && m[k] == (char)NNIK_RD_U8(&map[i].p[k]); k++)
-            ;
-        if (k == 6)
-            return (int8_t)-(int8_t)NNIK_RD_U8(&map[i].code);
-    }
+    if (m[0] == 'l')
+        return -11; /* line too long */
+    if (m[0] == 'b' || m[0] == 'n' || (m[0] == 't' && m[4] == 'm' && m[5] == 'a'))
+        return -2; /* bad number, number too large, too many decimals */
+    if (m[0] == 'r')
+        return -25; /* repeated word */
+    if (m[0] == 'a' || m[0] == 'R')
+        return -33; /* arcs */
     return -20; /* unsupported command */
 }
 
