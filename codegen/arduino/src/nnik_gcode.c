@@ -52,13 +52,25 @@ void nnik_gc_read_reset(nnik_gc_t *g);
 
 void nnik_gc_init(nnik_gc_t *g, nnik_gc_emit_fn emit)
 {
+    const int32_t at[2] = {0, 0};
+    g->emit = emit;
+    nnik_gc_place(g, at);
+}
+
+void nnik_gc_place(nnik_gc_t *g, const int32_t pt[2])
+{
     uint8_t *p = (uint8_t *)g;
     uint16_t i;
-    int32_t in[2];
+    int32_t in[2], at[2];
+    nnik_gc_emit_fn emit = g->emit;
+    at[0] = pt[0]; /* pt may lie in *g */
+    at[1] = pt[1];
     for (i = 0; i < sizeof *g; i++)
         p[i] = 0;
-    in[0] = NNIK_GC_ORIGIN_X_UM;
-    in[1] = NNIK_GC_ORIGIN_Y_UM;
+    g->mp[0] = g->pt[0] = at[0];
+    g->mp[1] = g->pt[1] = at[1];
+    in[0] = NNIK_GC_ORIGIN_X_UM + at[0];
+    in[1] = NNIK_GC_ORIGIN_Y_UM + at[1];
     NNIK_GC_IK(in, g->steps);
     g->feed = NNIK_GC_FEED_UM_MIN;
     g->home[0][2] = g->home[1][2] = Z_HOME;

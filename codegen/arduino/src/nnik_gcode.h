@@ -91,6 +91,10 @@ struct nnik_gc {
 /* Start at machine (0, 0) = the work origin; the motors are taken to be there. */
 void nnik_gc_init(nnik_gc_t *g, nnik_gc_emit_fn emit);
 
+/* As init, with the machine standing at pt (um, machine less the work origin) and the motors at
+ * IK(origin + pt), the G-code state fresh (a soft reset keeps where the motors are). */
+void nnik_gc_place(nnik_gc_t *g, const int32_t pt[2]);
+
 /* One byte of a line as it arrives (not '\n' or '\r'): read as grbl's protocol layer does. */
 void nnik_gc_byte(nnik_gc_t *g, uint8_t c);
 
