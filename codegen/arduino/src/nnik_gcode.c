@@ -327,16 +327,17 @@ static const uint8_t PLANE_AXES[3][2] = {{0, 1}, {2, 0}, {1, 2}};
 
 int8_t nnik_gc_exec(nnik_gc_t *g)
 {
-    nnik_blk_t b;
+    static nnik_blk_t b; /* static: a small stack frame is far smaller code on AVR (ldd reaches 63 B) */
     int8_t r;
     uint8_t inch, rel, plane, arc_abs, inverse, wcs, motion, nm, k, axes = 0, moving, axis_nm, extrude = 0;
     uint8_t e_rel, e_move, seg_blocks;
     uint16_t used = (1U << W_F) | (1U << W_T) | (1U << W_S);
-    int32_t feed, inv_f = 0, tlo, tgt[3], u[W_COUNT], e_tgt, dwell_ms = -1;
+    static int32_t u[W_COUNT];
+    int32_t feed, inv_f = 0, tlo, tgt[3], e_tgt, dwell_ms = -1;
     int32_t c[2] = {0, 0}, c1[2] = {0, 0}, c2[2] = {0, 0};
     uint32_t rad = 0;
     uint32_t blk0;
-    walk_t w;
+    static walk_t w;
 
     r = nnik_gc_parse(g->line, &b);
     if (r)
