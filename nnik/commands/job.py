@@ -56,6 +56,8 @@ def register(sub) -> None:
     p.add_argument("--tool-rule", choices=("s", "z", "e", "m300", "none"),
                    help="how the job turns the tool on: s (M3/M4 S), z (Z at or below the threshold), e (Marlin: a "
                         "move that extrudes), m300 (M300 S servo pen), none (default: from the tool and the file)")
+    p.add_argument("--tool-z", type=float, metavar="MM", help="a pen, spindle or knife is down at or below this Z "
+                   "(default: the scenario's [tool] pen_z_um, 0)")
     p.add_argument("--seg-um", type=int, help="longest arc chord in um (default 500)")
     p.add_argument("--shaper", metavar="KIND",
                    help="input shaper on the chip: none, zv, mzv, zvd, ei, or auto (the one that meets [motion] "
@@ -110,8 +112,8 @@ def cmd_job(args) -> None:
     from nnik.files.pick_state import require_deliverable
 
     require_deliverable(out, "job")  # the job runs the firmware: only the verified pick, never the MLP instead
-    opts = JobOptions(flavour=args.flavour, tool=args.tool, tool_rule=args.tool_rule, fit=args.fit, scale=args.scale,
-                      offset=args.offset)
+    opts = JobOptions(flavour=args.flavour, tool=args.tool, tool_rule=args.tool_rule, tool_z_mm=args.tool_z, fit=args.fit,
+                      scale=args.scale, offset=args.offset)
     res = run_job(out, Path(args.job), seg_um=args.seg_um, use_chip=False if args.no_chip else None,
                   shaper=args.shaper, precompensate=args.precompensate, opts=opts, check=args.check)
     if args.check:

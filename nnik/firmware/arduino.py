@@ -81,7 +81,7 @@ def export_arduino(outdir: Path, libdir: Path, machine: MachineConfig | None = N
                rapid_um_min=machine.rapid_um_min, feed_um_min=machine.feed_um_min, rows=rows, n=len(rows),
                tool=machine.tool, tool_defines=machine.defines(), sample_hz=machine.sample_hz,
                shaper=machine.shaper,
-               grbl_settings=settings_c_string(grbl_settings(machine, scn.workspace, ik)))
+               grbl_settings=settings_c_string(grbl_settings(machine, scn.workspace, ik, machine.bounds_um is not None)))
     env = _env()
     files = {
         libdir / "library.properties": "library.properties.j2",

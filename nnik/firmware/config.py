@@ -207,13 +207,12 @@ class MachineConfig:
                 "NNIK_GC_RULE": str(RULES.index(self.tool_rule)), "NNIK_GC_MARLIN": str(int(self.marlin)),
                 "NNIK_GC_M300_DOWN": f"{self.m300_down_max * 1000}L",
                 **{f"NNIK_GC_{f.upper()}": str(int(f in self.features)) for f in sorted(FEATURES)}}
-        if self.scale_q16 != SCALE_ONE or any(self.shift_um):
-            out.update({"NNIK_GC_SCALE_Q16": f"{self.scale_q16}L", "NNIK_GC_SHIFT_X_UM": f"{self.shift_um[0]}L",
-                        "NNIK_GC_SHIFT_Y_UM": f"{self.shift_um[1]}L"})
-        if self.bounds_um is not None:
-            (x0, y0), (x1, y1) = self.bounds_um
-            out.update({"NNIK_GC_MIN_X_UM": f"{x0}L", "NNIK_GC_MIN_Y_UM": f"{y0}L", "NNIK_GC_MAX_X_UM": f"{x1}L",
-                        "NNIK_GC_MAX_Y_UM": f"{y1}L"})
+        framed = self.scale_q16 != SCALE_ONE or any(self.shift_um)
+        out.update({"NNIK_GC_FRAME": str(int(framed)), "NNIK_GC_SCALE_Q16": f"{self.scale_q16}L",
+                    "NNIK_GC_SHIFT_X_UM": f"{self.shift_um[0]}L", "NNIK_GC_SHIFT_Y_UM": f"{self.shift_um[1]}L"})
+        (x0, y0), (x1, y1) = self.bounds_um if self.bounds_um is not None else ((0, 0), (0, 0))
+        out.update({"NNIK_GC_SOFT_LIMITS": str(int(self.bounds_um is not None)), "NNIK_GC_MIN_X_UM": f"{x0}L",
+                    "NNIK_GC_MIN_Y_UM": f"{y0}L", "NNIK_GC_MAX_X_UM": f"{x1}L", "NNIK_GC_MAX_Y_UM": f"{y1}L"})
         return out
 
 

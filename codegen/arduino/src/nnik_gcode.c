@@ -20,6 +20,12 @@
 #ifndef NNIK_GC_MARLIN
 #define NNIK_GC_MARLIN 0
 #endif
+#ifndef NNIK_GC_FRAME
+#define NNIK_GC_FRAME 0 /* 1: the job's frame transform (--fit, --scale, --offset) */
+#endif
+#ifndef NNIK_GC_SOFT_LIMITS
+#define NNIK_GC_SOFT_LIMITS 0 /* 1: ALARM:2 on a block end beyond the travel */
+#endif
 #ifndef NNIK_GC_M300_DOWN
 #define NNIK_GC_M300_DOWN 40000L
 #endif
@@ -149,11 +155,11 @@ NOINLINE static int8_t push(nnik_gc_t *g, const int32_t p[2], int32_t feed)
     int32_t e[2];
     e[0] = p[0];
     e[1] = p[1];
-#ifdef NNIK_GC_SCALE_Q16
+#if NNIK_GC_FRAME
     e[0] = (int32_t)(((int64_t)p[0] * NNIK_GC_SCALE_Q16 + 32768) >> 16) + NNIK_GC_SHIFT_X_UM;
     e[1] = (int32_t)(((int64_t)p[1] * NNIK_GC_SCALE_Q16 + 32768) >> 16) + NNIK_GC_SHIFT_Y_UM;
 #endif
-#ifdef NNIK_GC_MIN_X_UM
+#if NNIK_GC_SOFT_LIMITS
     if (e[0] < NNIK_GC_MIN_X_UM || e[0] > NNIK_GC_MAX_X_UM || e[1] < NNIK_GC_MIN_Y_UM || e[1] > NNIK_GC_MAX_Y_UM) {
         g->alarm = 2;
         return NNIK_GC_ALARM(2);

@@ -28,6 +28,7 @@ class JobOptions:
     flavour: str | None = None
     tool: str | None = None
     tool_rule: str | None = None
+    tool_z_mm: float | None = None  # a pen-like tool is down at or below this Z
     fit: bool = False
     scale: float | None = None
     offset: tuple[float, float] | None = None
@@ -105,6 +106,10 @@ def prepare(lines: list[bytes], cfg: MachineConfig, opts: JobOptions, source: st
             cfg = replace(cfg, tool=opts.tool, rule="")
         except ValueError as exc:
             raise NnikError(str(exc), None, "--tool") from None
+    if opts.tool_z_mm is not None:
+        if not abs(opts.tool_z_mm) <= 1000:
+            raise NnikError("must be within +-1000 mm", None, "--tool-z")
+        cfg = replace(cfg, pen_z_um=int(round(opts.tool_z_mm * 1000)))
     rule, why = (opts.tool_rule, "--tool-rule") if opts.tool_rule else choose_rule(cfg.tool, flavour, facts)
     bounds = cfg.bounds_um
     try:

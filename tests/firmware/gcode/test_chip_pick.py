@@ -18,7 +18,7 @@ from nnik.firmware.arduino import export_arduino
 from nnik.firmware.gcode import chip
 from nnik.firmware.gcode.job import CLOCK_HZ
 from nnik.firmware.gcode.motion import interpret, plan_steps
-from nnik.firmware.gcode.parse import split_lines
+from nnik.firmware.gcode.reader import split_lines
 from nnik.firmware.gcode.steps import chip_events, model_events
 from nnik.firmware.ik_oracle import ik_oracle, ik_sources, picked_implementation
 from tests.firmware.gcode.test_chip import JOBS, faster, toolchain  # noqa: F401 (autouse: skip without the toolchain)

@@ -49,7 +49,7 @@ def random_lines(n: int, seed: int) -> list[str]:
             out.append(f"G{rng.integers(2, 4)} I{i:.3f} J{j:.3f}")
             out.append("G90")
         else:
-            out.append(rng.choice(["G1 Z1", "G2 X1", "G1 X1 I1", "G1 X--1", "G7", "X99999", "G1 X1 (x",
+            out.append(rng.choice(["G1 Z1", "G2 X1", "G1 X1 I1", "G1 X--1", "G7", "X1234567890", "G1 X1 (x",
                                    "G1 F0", "G3 X0 Y0 I0 J0", "x" * 100]))
     return out
 
