@@ -194,6 +194,7 @@ NOINLINE static uint16_t idle_tool(const nnik_gc_t *g)
     uint8_t down = g->pen;
 #else
     uint8_t down = 0;
+    (void)g;
 #endif
     return down ? NNIK_GC_PEN_DOWN_DUTY : NNIK_GC_PEN_UP_DUTY;
 #else

@@ -46,7 +46,7 @@ def random_lines(n: int, seed: int) -> list[str]:
             out.append(rng.choice(["G90", "G21", "G20 G0 X0.2 Y-0.3", "G21", "M400", "(comment) ; more"]))
         elif k == 6:  # an arc back to where it starts (a full turn) or a half turn
             i, j = rng.uniform(-5, 5, 2)
-            out.append(f"G{rng.integers(2, 4)} I{i:.3f} J{j:.3f}")
+            out.append(f"G91 G{rng.integers(2, 4)} X0 Y0 I{i:.3f} J{j:.3f}")  # a full turn (grbl: X Y written)
             out.append("G90")
         else:
             out.append(rng.choice(["G1 Z1", "G2 X1", "G1 X1 I1", "G1 X--1", "G7", "X1234567890", "G1 X1 (x",
