@@ -229,7 +229,7 @@ void nnik_pl_sample(nnik_plan_t *pl, nnik_pl_sample_t *out)
                 break;
             }
             b = &pl->q[pl->head];
-            if (b->len >= 128 || o < (b->len << 16)) {
+            if (b->len >= 256 || o < (b->len << 16)) { /* o < 2^24: a block of 256 um or more holds it */
                 uint32_t r = (b->len << 16) - o; /* the low 32 bits: r_fr, and r_um by parts */
                 pl->r_fr = (uint16_t)r;
                 pl->r_um = b->len - (o >> 16) - ((uint16_t)o != 0);
