@@ -8,7 +8,7 @@
 #error "NNIK_GC_SEG_UM must be 100..5000 um"
 #endif
 
-#define ARC_STACK 32
+#define ARC_STACK 24 /* a quarter turn of R < 2^28 um needs 23 bisections to 100 um chords */
 #define BEZIER_NMAX 1024
 
 static int32_t iabs32(int32_t v) { return v < 0 ? -v : v; }

@@ -204,10 +204,10 @@ static int8_t mword(nnik_blk_t *b, const nnik_num_t *n)
 
 static int8_t letter_index(char c)
 {
-    static const char letters[] = "EFHIJKLPQRSTXYZ";
+    static NNIK_FLASH const char letters[] = "EFHIJKLPQRSTXYZ";
     int8_t i;
     for (i = 0; i < W_COUNT; i++)
-        if (letters[i] == c)
+        if ((char)NNIK_RD_U8(&letters[i]) == c)
             return i;
     return -1;
 }

@@ -12,7 +12,7 @@ from math import isqrt
 
 from nnik.firmware.gcode.codes import GcodeLineError
 
-ARC_STACK = 32
+ARC_STACK = 24  # a quarter turn of R < 2^28 um needs 23 bisections to 100 um chords
 BEZIER_NMAX = 1024
 
 

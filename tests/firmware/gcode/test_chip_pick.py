@@ -33,7 +33,7 @@ def test_lut_pick_steps_like_the_python_model(galvo_run, tmp_path):
 
     lib = export_arduino(run, tmp_path / "lib")
     fw = chip.build_sketch(tmp_path / "lib", f"{lib['name']}_gcode", tmp_path / "build")
-    lines = faster(split_lines((JOBS / "l_path.gcode").read_bytes()), 2)
+    lines = faster([ln.decode('latin-1') for ln in split_lines((JOBS / "l_path.gcode").read_bytes())], 2)
     cfg = lib["machine"]
     plan = interpret(lines, cfg)
     seg = plan_steps(plan, cfg, ik_oracle(run))

@@ -66,3 +66,20 @@ def test_each_file_runs_or_is_refused_by_name(machines, name, machine):
     if machine == "pen" and e["tool_rule"] in ("z", "s", "e"):
         assert prep.summary["tool_rule"] == e["tool_rule"]
     assert np.all(seg.ticks > 0)
+
+
+@pytest.mark.parametrize("name, machine", [("linuxcnc_skeleton.ngc", "corexy"), ("slic3r_sample.gcode", "pen"),
+                                           ("cncjs_spaces.nc", "galvo")])
+def test_short_files_on_the_simulated_uno(machines, name, machine):
+    """`nnik job --fit` on the chip: its build carries what the file uses, and every step, answer
+    and tool change equals the model's."""
+    from tests.firmware.gcode.conftest import require_chip
+
+    require_chip()
+    from nnik.firmware.gcode.job import run_job
+
+    run, _, opts = machines[machine]
+    res = run_job(run, REAL / name, opts=opts)
+    c = res["chip"]
+    assert c["steps_equal"] and c["replies_equal"] and c["tool_equal"] and c["selftest_pass"], c
+    assert res["clamped"] == 0 and c["flash_bytes"] <= 32256 and c["ram_bytes"] <= 2048 - 256
