@@ -64,14 +64,14 @@ def chip_run(outdir: Path, lines: list[str], cfg: MachineConfig, seconds: float,
     try:
         selftest = chip.build_sketch(Path(lib["dir"]), f"{name}_selftest", workdir / "build")
         st = chip.run_firmware(selftest, [], workdir / "build", 5.0)
-        fw = chip.build_sketch(Path(lib["dir"]), f"{name}_gcode", workdir / "build", cfg.defines())
+        fw = chip.build_sketch(Path(lib["dir"]), f"{name}_gcode", workdir / "build", chip.file_run_defines(cfg))
         run = chip.run_firmware(fw, lines, workdir / "build", 2.0 + 1.5 * seconds)
     except TargetError as exc:
         raise NnikError(f"avr: {exc}") from None
     st_line = next((t for _, t in st.replies if t.startswith(("PASS", "FAIL"))), "no answer")
     return {"selftest": st_line, "selftest_pass": st_line.startswith("PASS"),
             "flash_bytes": fw.flash_bytes, "ram_bytes": fw.ram_bytes, "state": run.state,
-            "replies": [t for _, t in run.replies if not t.startswith(("nnik ", "Grbl "))], "run": run,
+            "replies": [t for _, t in run.replies if not t.startswith(("nnik ", "Grbl ")) and t], "run": run,
             "events": chip_events(run.steps, run.marks, CLOCK_HZ // cfg.tick_hz),
             "tool_events": chip_tool_events(run.tool, run.marks, CLOCK_HZ // cfg.tick_hz),
             "segments_started": int(len(run.marks)), "end_cycle": run.end_cycle, **motion_times(run)}
