@@ -397,7 +397,7 @@ static void line_end(void)
         sync();
     } else if (r == NNIK_GC_PAUSE) {
         sync();
-        if (!GC_CHECK(gc)) { /* M0: a feed hold, until '~' */
+        if (!GC_CHECK(gc) && !NNIK_GRBL_PAUSE_RESUMES) { /* M0: a feed hold, until '~' */
             hold = 1;
             nnik_port_hold(1);
             while (hold)

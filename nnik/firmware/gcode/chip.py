@@ -39,7 +39,7 @@ def file_run_defines(cfg) -> dict[str, str]:
     """The build of a file run (`nnik job`, the model-equality tests): the planner never flushes on a
     quiet line (NNIK_GRBL_QUIET_MS 0; the harness ends every job with M400), so the motion depends
     on the lines alone, as the model's does. A sender's build keeps grbl_config.h's 5 ms."""
-    return {**cfg.defines(), "NNIK_GRBL_QUIET_MS": "0"}
+    return {**cfg.defines(), "NNIK_GRBL_QUIET_MS": "0", "NNIK_GRBL_PAUSE_RESUMES": "1"}
 
 
 def available() -> tuple[bool, str]:

@@ -70,7 +70,7 @@ def firmware(galvo_run, corexy_run, tmp_path_factory):
         pipeline.export(run)
         work = tmp_path_factory.mktemp(name)
         lib = export_arduino(run, work / "lib")
-        fw = chip.build_sketch(work / "lib", f"{name}_gcode", work / "build", {"NNIK_GRBL_QUIET_MS": "0"})
+        fw = chip.build_sketch(work / "lib", f"{name}_gcode", work / "build", {"NNIK_GRBL_QUIET_MS": "0", "NNIK_GRBL_PAUSE_RESUMES": "1"})
         out[name] = (run, lib, fw, ik_oracle(run), work / "build")
     return out
 

@@ -76,9 +76,11 @@ def test_short_files_on_the_simulated_uno(machines, name, machine):
     from tests.firmware.gcode.conftest import require_chip
 
     require_chip()
+    from nnik import pipeline
     from nnik.firmware.gcode.job import run_job
 
     run, _, opts = machines[machine]
+    pipeline.export(run)  # the pick's C, as `nnik run` leaves it
     res = run_job(run, REAL / name, opts=opts)
     c = res["chip"]
     assert c["steps_equal"] and c["replies_equal"] and c["tool_equal"] and c["selftest_pass"], c
