@@ -45,6 +45,8 @@ M_STOP = {0: 0, 10: 1, 20: 2, 300: 30}
 M_SPINDLE = {30: 3, 40: 4, 50: 5}
 M_COOLANT = {70: 7, 80: 8, 90: 9}
 M_FLOW = {970, 980, 990}  # subprogram call and return
+GROUPS = (("motion", MOTION), ("nonmodal", NONMODAL), ("plane", PLANE), ("inch", UNITS), ("relative", DISTANCE),
+          ("arc_abs", ARC_DISTANCE), ("inverse_time", FEED_MODE), ("tlo", TLO), ("wcs", WCS))
 
 
 @dataclass(frozen=True)
@@ -145,28 +147,13 @@ def _g(b: Block, n: Num, marlin: bool, features=FEATURES) -> None:
     off = next((f for f, codes in FEATURE_CODES.items() if c in codes and f not in features), None)
     if off and c not in noted_line:
         raise GcodeLineError(20, f"{name}: this build leaves out {off} (NNIK_GC_{off.upper()})")
+    group = next(((field, table) for field, table in GROUPS if c in table), None)
     if c in noted_line:
         b.noted_line = noted_line[c]
-    elif c in MOTION:
-        _set(b, "motion", MOTION[c])
-    elif c in NONMODAL:
-        _set(b, "nonmodal", NONMODAL[c])
-    elif c in PLANE:
-        _set(b, "plane", PLANE[c])
-    elif c in UNITS:
-        _set(b, "inch", UNITS[c])
-    elif c in DISTANCE:
-        _set(b, "relative", DISTANCE[c])
-    elif c in ARC_DISTANCE:
-        _set(b, "arc_abs", ARC_DISTANCE[c])
-    elif c in FEED_MODE:
-        _set(b, "inverse_time", FEED_MODE[c])
-    elif c in TLO:
-        _set(b, "tlo", TLO[c])
+    elif group:
+        _set(b, group[0], group[1][c])
         if c == 430:
             b.noted.append("G43")
-    elif c in WCS:
-        _set(b, "wcs", WCS[c])
     elif c in G_QUIET:
         pass
     elif c in G_NOTED_WORD:
