@@ -14,6 +14,7 @@ from nnik import pipeline
 from nnik.errors import NnikError
 from nnik.files.outdir import check_model_dir, check_outdir, release_locks
 from nnik.report.console import console, print_accuracy, print_front, print_selection
+from nnik.cli_job import add_job_parser
 
 
 def _outdir(args, scn, create: bool = False) -> Path:
@@ -333,48 +334,6 @@ def cmd_synth_csv(args) -> None:
                   "position noise")
 
 
-def cmd_job(args) -> None:
-    from nnik.firmware.gcode.job import run_job
-    from nnik.report.job_summary import JOB_HEADER, job_row
-
-    if Path(args.scenario).is_dir():
-        out = Path(args.scenario)
-        if args.outdir and Path(args.outdir).resolve() != out.resolve():
-            raise NnikError("-o picks the model directory of a scenario TOML; the first argument is already a model "
-                            "directory, so give one or the other", args.outdir, "-o")
-    else:
-        from nnik.machine.scenario import load_scenario
-
-        scn = load_scenario(args.scenario)
-        out = Path(args.outdir) if args.outdir else pipeline.default_outdir(scn)
-    if not (out / pipeline.MODEL_FILE).is_file():
-        raise NnikError(f"no trained model (run `nnik run {args.scenario}` first)", str(out))
-    from nnik.files.pick_state import require_deliverable
-
-    require_deliverable(out, "job")  # the job runs the firmware: only the verified pick, never the MLP instead
-    res = run_job(out, Path(args.job), seg_um=args.seg_um, use_chip=False if args.no_chip else None,
-                  shaper=args.shaper, precompensate=args.precompensate)
-    t = Table(title=f"G-code job {res['job']} on {res['scenario']} ({res['seconds']:.2f} s of motion)")
-    t.add_column("item")
-    t.add_column("result")
-    for h, v in zip(JOB_HEADER, job_row(res)):
-        t.add_row(h, v)
-    console.print(t)
-    if res.get("dynamics"):
-        from nnik.report.job_dynamics import print_methods
-
-        print_methods(console, res)
-    chip = res["chip"]
-    if "not_run" not in chip:
-        console.print(f"self-test on simavr: {chip['selftest']}")
-        if chip.get("end_s") is not None:
-            console.print(f"simulated chip: {chip['segments_started']} segments, idle at {chip['end_s']:.3f} s "
-                          f"({chip['motion_s']:.3f} s of motion; the model's {res['seconds']:.3f} s)")
-        if not (chip["steps_equal"] and chip["replies_equal"] and chip["selftest_pass"]):
-            raise NnikError("the simulated chip's steps or answers differ from the Python model", res["job"])
-    console.print(f"plot: {res['png']}; figures: {Path(res['png']).with_suffix('.json')}")
-
-
 def build_parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(prog="nnik", description="Inverse kinematics as verified fixed-point C for 8-bit MCUs.")
     sub = ap.add_subparsers(dest="command", required=True)
@@ -458,20 +417,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--inset-mm", type=float, default=0.05, help="marks this far inside [workspace] (default 0.05)")
     p.add_argument("--seed", type=int, default=0)
     p.set_defaults(func=cmd_synth_csv)
-    p = sub.add_parser("job", help="run a G-code job through the firmware logic (Python and simulated Uno)")
-    p.add_argument("scenario", help="scenario TOML (its build directory) or a model directory")
-    p.add_argument("job", help="G-code file")
-    p.add_argument("-o", "--outdir", help="model directory of the scenario TOML (default build/<name>/); "
-                   "an error with a model directory as the first argument")
-    p.add_argument("--seg-um", type=int, help="longest arc chord in um (default 500)")
-    p.add_argument("--shaper", metavar="KIND",
-                   help="input shaper on the chip: none, zv, mzv, zvd, ei, or auto (the one that meets [motion] "
-                        "max_contour_um at the least job time); default: the scenario's [motion] shaper")
-    p.add_argument("--precompensate", action="store_true",
-                   help="write OUTDIR/job/JOB_precompensated.gcode (the job rewritten so the modelled belts' tip "
-                        "follows the path) and run that instead")
-    p.add_argument("--no-chip", action="store_true", help="Python model only, no simavr run")
-    p.set_defaults(func=cmd_job)
+    add_job_parser(sub)
     return ap
 
 

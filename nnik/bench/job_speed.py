@@ -1,0 +1,97 @@
+"""`make bench`, the speed of `nnik job`: a long job through the Python model alone
+(`nnik job --no-chip`) and through the model and the simulated Uno (`nnik job`), side by side in
+one run, each timed over the whole command (start-up, imports, builds, simavr, the comparison,
+the plot and the JSON). Printed per run: the job's seconds of motion, the command's wall seconds
+and their ratio (times real time) against the issue's targets (model >= 100x, chip >= 4x), and
+for the chip the simulated cycles per wall second. The job is nnik.bench.longjob's raster
+(deterministic: 75 rows of 100 mm, about 305 s of motion) unless paths are given; the model is
+galvo_cba2012's `nnik run`, cached in build/bench/job_speed/. Figures also go to
+build/bench/job_speed.json.
+
+    python -m nnik.bench.job_speed [JOB.gcode ...] [--outdir MODEL_DIR] [--mcu atmega2560]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+from rich.console import Console
+from rich.table import Table
+
+from nnik.bench.longjob import raster, write
+
+console = Console(highlight=False, width=None if sys.stdout.isatty() else 200)
+DATASETS = Path(__file__).resolve().parents[2] / "datasets"
+OUT = Path("build") / "bench" / "job_speed"
+TARGETS = {"model": 100.0, "chip": 4.0}
+
+
+def model_dir(outdir: Path | None) -> Path:
+    """The scenario's finished `nnik run` (the job runs only the verified pick), made once."""
+    out = Path(outdir) if outdir else OUT / "galvo_cba2012"
+    if not (out / "pick.json").is_file():
+        if outdir:
+            raise SystemExit(f"{out}: no finished `nnik run` (pick.json)")
+        subprocess.run([sys.executable, "-m", "nnik", "run", str(DATASETS / "galvo_cba2012.toml"), "-o", str(out)],
+                       check=True, stdout=subprocess.DEVNULL)
+    return out
+
+
+def timed_job(out: Path, job: Path, chip: bool, mcu: str) -> dict:
+    """One `nnik job` command, timed from start to exit; its JSON's figures."""
+    cmd = [sys.executable, "-m", "nnik", "job", str(out), str(job)]
+    cmd += ["--mcu", mcu] if chip else ["--no-chip"]
+    t0 = time.perf_counter()
+    r = subprocess.run(cmd, capture_output=True, text=True, env={**os.environ, "COLUMNS": "200"})
+    wall = time.perf_counter() - t0
+    if r.returncode != 0:
+        raise SystemExit(f"{' '.join(cmd)} failed:\n{r.stderr[-2000:]}")
+    res = json.loads((out / "job" / f"{job.stem}.json").read_text())
+    row = {"job": job.name, "run": "chip" if chip else "model", "job_s": res["motion"]["job_s"], "wall_s": wall,
+           "samples": res["motion"]["samples"], "steps": res["steps"]}
+    row["ratio"] = row["job_s"] / wall
+    if chip:
+        c = res["chip"]
+        row.update(mcu=mcu, cycles=c["end_cycle"], cycles_per_s=c["end_cycle"] / wall, steps_equal=c["steps_equal"],
+                   replies_equal=c["replies_equal"], tool_equal=c["tool_equal"])
+    else:
+        row["samples_per_s"] = row["samples"] / wall
+    return row
+
+
+def main(argv=None) -> None:
+    p = argparse.ArgumentParser(prog="python -m nnik.bench.job_speed", description=__doc__.splitlines()[0])
+    p.add_argument("jobs", nargs="*", help="G-code files (default: the generated 305 s raster)")
+    p.add_argument("--outdir", help="a finished `nnik run` directory (default: galvo_cba2012's, made once)")
+    p.add_argument("--mcu", default="atmega328p", choices=("atmega328p", "atmega2560"))
+    a = p.parse_args(argv)
+    out = model_dir(a.outdir)
+    jobs = [Path(j) for j in a.jobs] or [write(OUT / "raster.gcode", raster())]
+    rows = []
+    for job in jobs:
+        for chip in (False, True):
+            rows.append(timed_job(out, job, chip, a.mcu))
+    t = Table(title="nnik job: seconds of motion per wall second, the whole command (times real time)")
+    for h in ("job", "run", "job s", "wall s", "ratio", "target", "rate", "every step equal"):
+        t.add_column(h, justify="left" if h in ("job", "run") else "right")
+    for r in rows:
+        tgt = TARGETS[r["run"]]
+        rate = (f"{r['cycles_per_s'] / 1e6:.0f} M cycles/s" if r["run"] == "chip"
+                else f"{r['samples_per_s'] / 1e3:.0f} k samples/s")
+        eq = ("yes" if r["steps_equal"] and r["replies_equal"] and r["tool_equal"] else "NO") if r["run"] == "chip" else "-"
+        t.add_row(r["job"], r["run"] if r["run"] == "model" else f"chip ({r['mcu']})", f"{r['job_s']:.1f}",
+                  f"{r['wall_s']:.1f}", f"{r['ratio']:.1f}x", f">= {tgt:g}x {'met' if r['ratio'] >= tgt else 'NOT met'}",
+                  rate, eq)
+    console.print(t)
+    (OUT.parent / "job_speed.json").parent.mkdir(parents=True, exist_ok=True)
+    (OUT.parent / "job_speed.json").write_text(json.dumps(rows, indent=2) + "\n")
+
+
+if __name__ == "__main__":
+    main()
