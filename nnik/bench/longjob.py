@@ -6,7 +6,8 @@ diagonal gradient sampled on a pixel grid, runs of equal power merged into one G
 LaserGRBL does.  ``vector``: a text-like vector job (strokes of short G1 lines and G2/G3 arcs,
 tool on in the strokes, G0 between them).  Both are pure functions of their arguments.
 
-    python -m nnik.bench.longjob raster OUT.gcode [--rows N] [--width MM] [--feed MM_MIN]
+    python -m nnik.bench.longjob raster OUT.gcode [--rows N] [--width MM] [--pixel MM] [--pitch MM]
+        [--feed MM_MIN] [--dither]
 """
 
 from __future__ import annotations
@@ -16,17 +17,25 @@ import math
 from pathlib import Path
 
 
-def _power(x: float, y: float, w: float, h: float) -> int:
-    """The image's power at (x, y) in 0..1000 (S units), quantised to 9 levels."""
+BAYER4 = (0, 8, 2, 10, 12, 4, 14, 6, 3, 11, 1, 9, 15, 7, 13, 5)  # ordered dither, 4 x 4
+
+
+def _power(x: float, y: float, w: float, h: float, cell: int = -1) -> int:
+    """The image's power at (x, y) in 0..1000 (S units), quantised to 9 levels; with a dither
+    cell (0..15) ordered-dithered as a photo engraving is (nearly every pixel its own S)."""
     r = math.hypot(x, y) / (0.5 * min(w, h))
     ring = 0.5 + 0.5 * math.cos(2 * math.pi * 3 * r)
     grad = (x / w + y / h + 1.0) / 2.0
     v = 0.6 * ring + 0.4 * grad if r < 1.0 else 0.2 * grad
+    if cell >= 0:
+        v += (BAYER4[cell] - 7.5) / 16 * 0.25
     return int(round(min(max(v, 0.0), 1.0) * 8)) * 125
 
 
-def raster(rows: int = 75, width: float = 100.0, pixel: float = 3.0, feed: int = 1500, pitch: float = 1.0) -> str:
-    """Rows of width mm, pixel mm apart along a row, pitch mm between rows, at feed mm/min."""
+def raster(rows: int = 75, width: float = 100.0, pixel: float = 3.0, feed: int = 1500, pitch: float = 1.0,
+           dither: bool = False) -> str:
+    """Rows of width mm, pixel mm apart along a row, pitch mm between rows, at feed mm/min;
+    dither: ordered-dithered pixels (a photo engraving: a line per pixel, nearly)."""
     h = rows * pitch
     x0, y0 = -width / 2, -h / 2
     n = int(round(width / pixel))
@@ -43,9 +52,10 @@ def raster(rows: int = 75, width: float = 100.0, pixel: float = 3.0, feed: int =
         for c in cols:
             xe = x0 + (c + 1) * pixel if forward else x0 + c * pixel
             xc = x0 + (c + 0.5) * pixel
-            s = _power(xc, y, width, h)
+            cell = lambda k: (r % 4) * 4 + k % 4 if dither else -1  # noqa: E731
+            s = _power(xc, y, width, h, cell(c))
             nxt = c + 1 if forward else c - 1
-            if 0 <= nxt < n and _power(x0 + (nxt + 0.5) * pixel, y, width, h) == s:
+            if 0 <= nxt < n and _power(x0 + (nxt + 0.5) * pixel, y, width, h, cell(nxt)) == s:
                 continue  # the run goes on: one G1 for the whole run
             word = f"G1 X{xe:.3f}" if first else f"X{xe:.3f}"
             if s != last_s:
@@ -99,9 +109,12 @@ def main(argv=None) -> None:
     p.add_argument("--width", type=float, default=100.0)
     p.add_argument("--pixel", type=float, default=3.0)
     p.add_argument("--feed", type=int, default=1500)
+    p.add_argument("--pitch", type=float, default=1.0)
+    p.add_argument("--dither", action="store_true", help="ordered-dithered pixels (a photo engraving)")
     p.add_argument("--glyphs", type=int, default=400)
     a = p.parse_args(argv)
-    text = raster(a.rows, a.width, a.pixel, a.feed) if a.kind == "raster" else vector(a.glyphs, feed=a.feed)
+    text = (raster(a.rows, a.width, a.pixel, a.feed, a.pitch, a.dither) if a.kind == "raster"
+            else vector(a.glyphs, feed=a.feed))
     path = write(Path(a.out), text)
     print(f"{path}: {text.count(chr(10))} lines")
 

@@ -15,6 +15,9 @@ from nnik.firmware.config import MachineConfig  # noqa: E402
 from nnik.firmware.gcode.motion import Plan  # noqa: E402
 
 
+MAX_POINTS = 60_000  # reached positions drawn (the figures use every one)
+
+
 def _path_points(plan: Plan, cfg: MachineConfig, n: int = 400) -> list[np.ndarray]:
     """Dense points of each programmed move (mm, machine frame)."""
     origin = np.asarray(cfg.origin_um) / 1000.0
@@ -38,15 +41,20 @@ def _tool_runs(seg, cfg: MachineConfig) -> list[tuple[bool, np.ndarray]]:
     """The segment path (mm, machine frame) cut into runs with the tool on or off."""
     origin = np.asarray(cfg.origin_um) / 1000.0
     pts = origin + np.concatenate([[[0, 0]], seg.ends_um]) / 1000.0
-    on = seg.duty != cfg.tool_off_duty
-    runs, k = [], 0
-    while k < len(on):
-        j = k
-        while j < len(on) and on[j] == on[k]:
-            j += 1
-        runs.append((bool(on[k]), pts[k:j + 1]))
-        k = j
-    return runs
+    on = np.asarray(seg.duty != cfg.tool_off_duty)
+    if not len(on):
+        return []
+    starts = np.flatnonzero(np.r_[True, on[1:] != on[:-1]])
+    ends = np.r_[starts[1:], len(on)]
+    return [(bool(on[k]), pts[k:j + 1]) for k, j in zip(starts.tolist(), ends.tolist())]
+
+
+def _thin(n: int, keep: np.ndarray | None = None, most: int = MAX_POINTS) -> np.ndarray:
+    """Indices of at most about `most` of n points, evenly spread, plus `keep` (drawing only)."""
+    if n <= most:
+        return np.arange(n)
+    idx = np.arange(0, n, -(-n // most))
+    return np.union1d(idx, keep) if keep is not None else idx
 
 
 def job_png(path: Path, title: str, plan: Plan, cfg: MachineConfig, plot: dict, seg=None) -> Path:
@@ -67,9 +75,10 @@ def job_png(path: Path, title: str, plan: Plan, cfg: MachineConfig, plot: dict, 
         if seen:
             ax.legend(loc="upper right", fontsize=7)
     if len(reached_mm):
-        sc = ax.scatter(reached_mm[:, 0], reached_mm[:, 1], c=error_um, s=5, cmap="viridis", zorder=2)
+        k = _thin(len(reached_mm), np.argsort(error_um)[-100:])  # a long job: evenly spread, the worst kept
+        sc = ax.scatter(reached_mm[k, 0], reached_mm[k, 1], c=error_um[k], s=5, cmap="viridis", zorder=2)
         fig.colorbar(sc, ax=ax, label="contour error (µm)")
-        ax2.plot(time_s, error_um, lw=0.7, color="tab:blue")
+        ax2.plot(time_s[k], error_um[k], lw=0.7, color="tab:blue")
     ax.set_aspect("equal", adjustable="datalim")
     ax.set_xlabel("x (mm)")
     ax.set_ylabel("y (mm)")
