@@ -27,49 +27,80 @@ def _stats(d: np.ndarray) -> dict:
 
 
 def _line_dist(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    return _line_geo_dist(p, _line_geo(a, b))
+
+
+def _line_geo(a: np.ndarray, b: np.ndarray) -> tuple:
     ab = b - a
-    L2 = float(ab @ ab)
+    return a, ab, float(ab @ ab)
+
+
+def _line_geo_dist(p: np.ndarray, geo: tuple) -> np.ndarray:
+    a, ab, L2 = geo
     t = np.zeros(len(p)) if L2 == 0 else np.clip(((p - a) @ ab) / L2, 0.0, 1.0)
     return np.linalg.norm(p - (a + t[:, None] * ab), axis=1)
 
 
+def _ang(v: np.ndarray):
+    return np.arctan2(v[..., 1], v[..., 0])
+
+
 def _arc_dist(p: np.ndarray, c: np.ndarray, r: float, a: np.ndarray, b: np.ndarray, ccw: bool) -> np.ndarray:
     """Distance to the arc from a to b about c (radius r), counter-clockwise if ccw."""
-    ang = lambda v: np.arctan2(v[..., 1], v[..., 0])  # noqa: E731
-    a0, b0 = ang(a - c), ang(b - c)
+    return _arc_geo_dist(p, _arc_geo(c, r, a, b, ccw))
+
+
+def _arc_geo(c: np.ndarray, r: float, a: np.ndarray, b: np.ndarray, ccw: bool) -> tuple:
+    a0, b0 = _ang(a - c), _ang(b - c)
     sweep = (b0 - a0) % (2 * np.pi) if ccw else (a0 - b0) % (2 * np.pi)
     if sweep == 0:
         sweep = 2 * np.pi  # end = start: a full turn
-    rel = (ang(p - c) - a0) % (2 * np.pi) if ccw else (a0 - ang(p - c)) % (2 * np.pi)
+    return c, r, a, b, ccw, a0, sweep
+
+
+def _arc_geo_dist(p: np.ndarray, geo: tuple) -> np.ndarray:
+    c, r, a, b, ccw, a0, sweep = geo
+    rel = (_ang(p - c) - a0) % (2 * np.pi) if ccw else (a0 - _ang(p - c)) % (2 * np.pi)
     radial = np.abs(np.linalg.norm(p - c, axis=1) - r)
     ends = np.minimum(np.linalg.norm(p - a, axis=1), np.linalg.norm(p - b, axis=1))
     return np.where(rel <= sweep, radial, ends)
 
 
-def move_dist(p_mm: np.ndarray, mv: Move, origin_mm: np.ndarray) -> np.ndarray:
+def _move_geo(mv: Move, origin_mm: np.ndarray) -> tuple:
+    """What move_dist takes from a move before it looks at the points."""
     a = origin_mm + np.asarray(mv.start) / 1000.0
     b = origin_mm + np.asarray(mv.end) / 1000.0
     if mv.kind == "line":
-        return _line_dist(p_mm, a, b)
+        return _line_geo_dist, _line_geo(a, b)
     c = origin_mm + np.asarray(mv.center) / 1000.0
-    return _arc_dist(p_mm, c, mv.radius / 1000.0, a, b, mv.ccw)
+    return _arc_geo_dist, _arc_geo(c, mv.radius / 1000.0, a, b, mv.ccw)
+
+
+def move_dist(p_mm: np.ndarray, mv: Move, origin_mm: np.ndarray) -> np.ndarray:
+    fn, geo = _move_geo(mv, origin_mm)
+    return fn(p_mm, geo)
 
 
 def path_dist_um(p_mm: np.ndarray, move_idx: np.ndarray, moves: list[Move], origin_mm: np.ndarray) -> np.ndarray:
     """Distance (um) of each point to its move or the moves before and after it."""
     # the points grouped by move with one stable sort (each group is the same points, in the
-    # same order, that a mask per move would pick: the same arithmetic, without a pass per move)
+    # same order, that a mask per move would pick: the same arithmetic, without a pass per move;
+    # BLAS rounds a product differently by its place in an array, so the groups must stay these)
     move_idx = np.asarray(move_idx)
     order = np.argsort(move_idx, kind="stable")
     ms, first = np.unique(move_idx[order], return_index=True)
     bounds = np.append(first, len(order))
     p_sorted = p_mm[order]
     d = np.full(len(p_mm), np.inf)
+    geo = {}
     for m, lo, hi in zip(ms.tolist(), bounds[:-1].tolist(), bounds[1:].tolist()):
         pts, best = p_sorted[lo:hi], np.full(hi - lo, np.inf)
         for k in (m - 1, m, m + 1):
             if 0 <= k < len(moves):
-                best = np.minimum(best, move_dist(pts, moves[k], origin_mm))
+                if k not in geo:
+                    geo[k] = _move_geo(moves[k], origin_mm)
+                fn, g = geo[k]
+                best = np.minimum(best, fn(pts, g))
         d[order[lo:hi]] = best
     return d * 1000.0
 

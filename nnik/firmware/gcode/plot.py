@@ -8,6 +8,8 @@ import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
+from matplotlib.collections import LineCollection  # noqa: E402
+from matplotlib.lines import Line2D  # noqa: E402
 import numpy as np  # noqa: E402
 
 from nnik.firmware.gcode.contour import move_dist  # noqa: E402
@@ -57,23 +59,32 @@ def _thin(n: int, keep: np.ndarray | None = None, most: int = MAX_POINTS) -> np.
     return np.union1d(idx, keep) if keep is not None else idx
 
 
+def _lines(ax, parts: list[np.ndarray], color, lw: float, ls: str = "-", zorder: int = 1) -> None:
+    """Polylines as one LineCollection, the axes' limits taken over their points."""
+    ax.add_collection(LineCollection(parts, colors=color, linewidths=lw, linestyles=ls, zorder=zorder))
+    ax.update_datalim(np.concatenate(parts))
+    ax.autoscale_view()
+
+
 def job_png(path: Path, title: str, plan: Plan, cfg: MachineConfig, plot: dict, seg=None) -> Path:
     """Left: the path (with the segments: tool on solid, travel dashed) and the reached positions
     coloured by contour error; right: the contour error over the job's time."""
     reached_mm, error_um, time_s = plot["reached_mm"], plot["error_um"], plot["time_s"]
     fig, (ax, ax2) = plt.subplots(1, 2, figsize=(11, 4.8), dpi=100, gridspec_kw={"width_ratios": [1.1, 1]})
+    # one collection per style (a photo engraving has a run per pixel: an artist each would take minutes)
     if seg is None or seg.duty is None:
-        for pts in _path_points(plan, cfg):
-            ax.plot(pts[:, 0], pts[:, 1], color="0.6", lw=0.8, zorder=1)
+        _lines(ax, _path_points(plan, cfg), color="0.6", lw=0.8, zorder=1)
     else:
-        seen = set()
-        for on, pts in _tool_runs(seg, cfg):
-            label = None if on in seen else ("tool on" if on else "travel")
-            seen.add(on)
-            ax.plot(pts[:, 0], pts[:, 1], color="black" if on else "tab:red", lw=0.9 if on else 0.8,
-                    ls="-" if on else "--", zorder=3, label=label)  # over the reached positions
-        if seen:
-            ax.legend(loc="upper right", fontsize=7)
+        runs = _tool_runs(seg, cfg)
+        handles = []
+        for on in (True, False):
+            style = {"color": "black" if on else "tab:red", "lw": 0.9 if on else 0.8, "ls": "-" if on else "--"}
+            pts = [p for o, p in runs if o == on]
+            if pts:
+                _lines(ax, pts, zorder=3, **style)  # over the reached positions
+                handles.append(Line2D([], [], label="tool on" if on else "travel", **style))
+        if handles:
+            ax.legend(handles=handles[::-1] if not runs[0][0] else handles, loc="upper right", fontsize=7)
     if len(reached_mm):
         k = _thin(len(reached_mm), np.argsort(error_um)[-100:])  # a long job: evenly spread, the worst kept
         sc = ax.scatter(reached_mm[k, 0], reached_mm[k, 1], c=error_um[k], s=5, cmap="viridis", zorder=2)
