@@ -3,12 +3,13 @@
 one run, each timed over the whole command (start-up, imports, builds, simavr, the comparison,
 the plot and the JSON). Printed per run: the job's seconds of motion, the command's wall seconds
 and their ratio (times real time) against the issue's targets (model >= 100x, chip >= 4x), and
-for the chip the simulated cycles per wall second. The job is nnik.bench.longjob's raster
+for the chip the simulated cycles per wall second; and the model's run_job timed inside one
+process after its imports (torch, the pipeline, matplotlib: about 2 s of every command). The job is nnik.bench.longjob's raster
 (deterministic: 75 rows of 100 mm, about 305 s of motion) unless paths are given; the model is
 galvo_cba2012's `nnik run`, cached in build/bench/job_speed/. Figures also go to
 build/bench/job_speed.json.
 
-    python -m nnik.bench.job_speed [JOB.gcode ...] [--outdir MODEL_DIR] [--mcu atmega2560]
+    python -m nnik.bench.job_speed [JOB.gcode ...] [--outdir MODEL_DIR] [--mcu atmega2560] [--photo]
 """
 
 from __future__ import annotations
@@ -65,28 +66,46 @@ def timed_job(out: Path, job: Path, chip: bool, mcu: str) -> dict:
     return row
 
 
+def in_process(out: Path, job: Path) -> dict:
+    """The Python model's run_job timed inside one process after its imports (torch, the
+    pipeline, matplotlib): the share of the command that is the model's own work."""
+    code = ("import json, sys, time; from pathlib import Path; import nnik.pipeline, nnik.firmware.gcode.plot; "
+            "from nnik.firmware.gcode.job import run_job; t = time.perf_counter(); "
+            "r = run_job(Path(sys.argv[1]), Path(sys.argv[2]), use_chip=False); "
+            "print(json.dumps([time.perf_counter() - t, r['motion']['job_s'], r['motion']['samples']]))")
+    r = subprocess.run([sys.executable, "-c", code, str(out), str(job)], capture_output=True, text=True, check=True)
+    wall, job_s, samples = json.loads(r.stdout.strip().splitlines()[-1])
+    return {"job": job.name, "run": "model, after imports", "job_s": job_s, "wall_s": wall, "samples": samples,
+            "ratio": job_s / wall, "samples_per_s": samples / wall}
+
+
 def main(argv=None) -> None:
     p = argparse.ArgumentParser(prog="python -m nnik.bench.job_speed", description=__doc__.splitlines()[0])
     p.add_argument("jobs", nargs="*", help="G-code files (default: the generated 305 s raster)")
     p.add_argument("--outdir", help="a finished `nnik run` directory (default: galvo_cba2012's, made once)")
     p.add_argument("--mcu", default="atmega328p", choices=("atmega328p", "atmega2560"))
+    p.add_argument("--photo", action="store_true",
+                   help="also a 101,184-line photo engraving (ordered dither, a line per pixel; 458 s of motion)")
     a = p.parse_args(argv)
     out = model_dir(a.outdir)
     jobs = [Path(j) for j in a.jobs] or [write(OUT / "raster.gcode", raster())]
+    if a.photo:
+        jobs.append(write(OUT / "photo.gcode", raster(225, 50.0, 0.1, pitch=0.1, dither=True)))
     rows = []
     for job in jobs:
         for chip in (False, True):
             rows.append(timed_job(out, job, chip, a.mcu))
+        rows.append(in_process(out, job))
     t = Table(title="nnik job: seconds of motion per wall second, the whole command (times real time)")
     for h in ("job", "run", "job s", "wall s", "ratio", "target", "rate", "every step equal"):
         t.add_column(h, justify="left" if h in ("job", "run") else "right")
     for r in rows:
-        tgt = TARGETS[r["run"]]
+        tgt = TARGETS.get(r["run"])
         rate = (f"{r['cycles_per_s'] / 1e6:.0f} M cycles/s" if r["run"] == "chip"
                 else f"{r['samples_per_s'] / 1e3:.0f} k samples/s")
         eq = ("yes" if r["steps_equal"] and r["replies_equal"] and r["tool_equal"] else "NO") if r["run"] == "chip" else "-"
-        t.add_row(r["job"], r["run"] if r["run"] == "model" else f"chip ({r['mcu']})", f"{r['job_s']:.1f}",
-                  f"{r['wall_s']:.1f}", f"{r['ratio']:.1f}x", f">= {tgt:g}x {'met' if r['ratio'] >= tgt else 'NOT met'}",
+        t.add_row(r["job"], f"chip ({r['mcu']})" if r["run"] == "chip" else r["run"], f"{r['job_s']:.1f}",
+                  f"{r['wall_s']:.1f}", f"{r['ratio']:.1f}x", f">= {tgt:g}x {'met' if r['ratio'] >= tgt else 'NOT met'}" if tgt else "-",
                   rate, eq)
     console.print(t)
     (OUT.parent / "job_speed.json").parent.mkdir(parents=True, exist_ok=True)
