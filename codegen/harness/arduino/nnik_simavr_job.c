@@ -19,8 +19,8 @@
  * The sketch drives raw PORTD/PORTB bits, the same port bits on both chips.
  *
  * usage: nnik_simavr_job [-m MCU] [-e EVENTS] FIRMWARE.elf JOB_LINES MAX_SECONDS
- * JOB_LINES holds the lines to send, one per line.  The first line the firmware prints (its
- * banner: "nnik NAME ready", or grbl's "Grbl 1.1h ['$' for help]") starts the job; a line that
+ * JOB_LINES holds the lines to send, one per line.  The first line with text the firmware prints
+ * (its banner: "nnik NAME ready", or grbl's "Grbl 1.1h ['$' for help]") starts the job; a line that
  * starts with "ok" or "error:" answers the line sent and the next is sent; any other line is
  * only recorded.  After the answer to the last line the harness sends DRAIN (M400: the sketch
  * answers it once its segment queue is empty and the last step is out), so the run covers all
@@ -147,8 +147,9 @@ static void on_uart(struct avr_irq_t *irq, uint32_t value, void *param)
         out_len--;
     out_line[out_len] = 0;
     out_len = 0;
-    banner = !started; /* the first line: the firmware is ready */
-    started = 1;
+    banner = !started && out_line[0]; /* the first line with text: the firmware is ready (grbl's
+                                          * start-up message begins with an empty line) */
+    started |= banner;
     answer = !banner && (strncmp(out_line, "ok", 2) == 0 || strncmp(out_line, "error:", 6) == 0);
     if (answer && n_replies == n_lines)
         printf("D %llu %s\n", idle_fall, out_line);

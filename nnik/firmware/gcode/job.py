@@ -116,7 +116,9 @@ def chip_job(built: dict, lines: list[str], cfg: MachineConfig, seconds: float, 
         run = chip.run_firmware(fw, lines, built["workdir"] / "build", 2.0 + 1.5 * seconds, progress=progress)
     except TargetError as exc:
         raise NnikError(f"avr: {exc}") from None
-    said = [t for _, t in run.replies[1:]]  # after the banner: answers, and any message lines
+    texts = [t for _, t in run.replies]
+    start = next((i + 1 for i, t in enumerate(texts) if t), len(texts))  # after the banner (its first text)
+    said = [t for t in texts[start:] if t]  # answers, and any message lines
     out = {"selftest": built["selftest"], "selftest_pass": built["selftest"].startswith("PASS"),
            "flash_bytes": fw.flash_bytes, "ram_bytes": fw.ram_bytes, "state": run.state,
            "replies": [t for t in said if is_answer(t)], "run": run,
