@@ -170,9 +170,8 @@ def write_step_counts(path: Path, steps: np.ndarray, start: np.ndarray) -> Path:
         sel = steps[:, 1] == m
         count[sel] = start[m] + np.cumsum(sign[sel])
     path.parent.mkdir(parents=True, exist_ok=True)
-    with open(path, "w") as f:
-        f.write("cycle,motor,dir,count\n")
-        np.savetxt(f, np.column_stack([steps, count]), fmt="%d", delimiter=",")
+    rows = np.column_stack([steps, count])
+    path.write_text("cycle,motor,dir,count\n" + ("%d,%d,%d,%d\n" * len(rows)) % tuple(rows.ravel().tolist()))
     return path
 
 
