@@ -14,7 +14,6 @@ from nnik import pipeline
 from nnik.errors import NnikError
 from nnik.files.outdir import check_model_dir, check_outdir, release_locks
 from nnik.report.console import console, print_accuracy, print_front, print_selection
-from nnik.cli_job import add_job_parser
 
 
 def _outdir(args, scn, create: bool = False) -> Path:
@@ -417,7 +416,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--inset-mm", type=float, default=0.05, help="marks this far inside [workspace] (default 0.05)")
     p.add_argument("--seed", type=int, default=0)
     p.set_defaults(func=cmd_synth_csv)
-    add_job_parser(sub)
+    from nnik.commands import job as job_command
+
+    job_command.register(sub)
     return ap
 
 

@@ -25,6 +25,18 @@ def readme_commands() -> list[str]:
     return cmds
 
 
+DOCS_FENCE = re.compile(r"```docs-commands\n(.*?)```", re.S)
+
+
+def docs_commands() -> list[tuple[str, str]]:
+    """(page, command) of every ```docs-commands block in docs/*.md: run after the README's."""
+    out = []
+    for page in sorted((ROOT / "docs").glob("*.md")):
+        for block in DOCS_FENCE.findall(page.read_text()):
+            out += [(page.name, ln.strip()) for ln in block.splitlines() if ln.strip() and not ln.lstrip().startswith("#")]
+    return out
+
+
 def fresh_copy(dst: Path) -> Path:
     """The tracked files of the repository (what a clone has), without build/ or caches."""
     files = subprocess.run(["git", "ls-files", "-z"], cwd=ROOT, capture_output=True, check=True).stdout
@@ -49,9 +61,9 @@ def test_readme_commands_run_verbatim_from_a_fresh_copy(tmp_path):
     nnik = shutil.which("nnik")
     assert nnik, "the nnik console script is installed (pip install -e .)"
     env = {**os.environ, "PATH": f"{Path(sys.executable).parent}{os.pathsep}{os.environ['PATH']}"}
-    for cmd in readme_commands():
+    for page, cmd in [("README.md", c) for c in readme_commands()] + docs_commands():
         r = subprocess.run(cmd, shell=True, cwd=repo, env=env, capture_output=True, text=True, timeout=1200)
-        assert r.returncode == 0, f"`{cmd}` exited {r.returncode}: {(r.stderr or r.stdout)[-800:]}"
+        assert r.returncode == 0, f"{page}: `{cmd}` exited {r.returncode}: {(r.stderr or r.stdout)[-800:]}"
         assert "Traceback" not in r.stderr, cmd
     out = repo / "build" / "galvo_cba2012"
     assert (out / "c" / "galvo_cba2012.c").is_file() and (out / "report" / "index.html").is_file()

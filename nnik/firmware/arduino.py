@@ -19,11 +19,15 @@ from nnik import pipeline
 from nnik.machine.domain import domain_um
 from nnik.emit.templating import CODEGEN, RUNTIME, environment
 from nnik.firmware.config import MachineConfig, default_machine
+from nnik.firmware.grbl_settings import grbl_settings, settings_c_string
 from nnik.emit.c_text import c_comment_safe
 from nnik.firmware.ik_oracle import ik_oracle, ik_sources, load_scenario_of, picked_implementation
 
 ARDUINO = CODEGEN / "arduino"
-ENGINE_FILES = ("nnik_gcode.h", "nnik_gcode.c", "nnik_plan.h", "nnik_plan.c", "nnik_shaper.h", "nnik_shaper.c")
+ENGINE_C = ("nnik_gcode.c", "nnik_gc_read.c", "nnik_gc_parse.c", "nnik_gc_geom.c", "nnik_imath.c", "nnik_plan.c",
+            "nnik_shaper.c")
+ENGINE_FILES = (*ENGINE_C, "nnik_gcode.h", "nnik_gc_block.h", "nnik_gc_geom.h", "nnik_imath.h", "nnik_plan.h",
+                "nnik_shaper.h", "nnik_grbl.h", "nnik_grbl.c")
 VERSION = "0.1.0"
 N_GOLDEN = 64
 
@@ -76,12 +80,14 @@ def export_arduino(outdir: Path, libdir: Path, machine: MachineConfig | None = N
                origin=list(machine.origin_um), seg_um=machine.seg_um, tick_hz=machine.tick_hz, homepage=homepage(),
                rapid_um_min=machine.rapid_um_min, feed_um_min=machine.feed_um_min, rows=rows, n=len(rows),
                tool=machine.tool, tool_defines=machine.defines(), sample_hz=machine.sample_hz,
-               shaper=machine.shaper)
+               shaper=machine.shaper,
+               grbl_settings=settings_c_string(grbl_settings(machine, scn.workspace, ik, machine.bounds_um is not None)))
     env = _env()
     files = {
         libdir / "library.properties": "library.properties.j2",
         libdir / "library.json": "library.json.j2",
         src / "nnik_gcode_config.h": "gcode_config.h.j2",
+        src / "nnik_grbl_config.h": "grbl_config.h.j2",
         libdir / "examples" / f"{name}_selftest" / f"{name}_selftest.ino": "selftest.ino.j2",
         libdir / "examples" / f"{name}_gcode" / f"{name}_gcode.ino": "gcode.ino.j2",
     }

@@ -11,7 +11,17 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-TOOLS = ("laser", "pen", "servo")
+TOOLS = ("laser", "pen", "servo", "spindle", "knife", "none")
+# how a job turns the tool on: "s" (M3/M4 with S: a laser; on a pen-like tool, down while on),
+# "z" (down at or below pen_z_um), "e" (Marlin: a move that extrudes), "m300" (a servo pen:
+# M300 S at or below m300_down_max is down), "none" (never on)
+RULES = ("s", "z", "e", "m300", "none")
+SCALE_ONE = 1 << 16
+FEATURES = frozenset({"g5", "g93", "planes", "wcs"})
+# the Uno's default build: grbl's own coordinate systems and planes; G93 (1.1 kB) and G5 (2.2 kB) are
+# left out (each line that needs one: error 20), as grbl's config.h leaves out what does not fit;
+# a job's build carries exactly what its file uses, and the ATmega2560 build carries everything
+UNO_FEATURES = frozenset({"wcs", "planes"})
 SHAPER_KINDS = ("none", "zv", "mzv", "zvd", "ei")
 SHAPER_RAM_BUDGET = 512  # bytes of SRAM the shaper's buffers may take on the ATmega328
 MIN_FEED_UM_MIN = 1000
@@ -46,6 +56,16 @@ class MachineConfig:
     # per axis (amplitudes Q15, delays in samples); empty with shaper "none"
     shaper_taps: tuple = ()
     plan_blocks: int = 8  # the planner's lookahead queue
+    rule: str = ""  # the tool rule (RULES); "" = the tool's default: s for a laser, else z
+    marlin: bool = False  # G4 P in ms, Marlin's setup G codes noted, E words read
+    m300_down_max: int = 40  # M300 S at or below this puts a servo pen down (unicorn: 30 down, 50 up)
+    scale_q16: int = SCALE_ONE  # the job's frame -> the machine's: p * scale / 2^16 + shift_um
+    shift_um: tuple[int, int] = (0, 0)
+    # soft limits, um (machine less the work origin): ((x_lo, y_lo), (x_hi, y_hi)); None: none
+    bounds_um: tuple | None = None
+    # build options, as grbl's config.h: g5 (Marlin's Bezier), g93 (inverse time), planes (arcs in
+    # G18/G19), wcs (G10, G55-G59, G28.1, G30.1); a line that needs one left out is error 20
+    features: frozenset = FEATURES
 
     @property
     def rapid_um_min(self) -> int:
@@ -85,7 +105,28 @@ class MachineConfig:
             raise ValueError("s_max must be 1..9999")
         if not (0 <= self.servo_up_deg <= 180 and 0 <= self.servo_down_deg <= 180):
             raise ValueError("servo angles must be 0..180 degrees")
+        if self.rule not in RULES + ("",):
+            raise ValueError(f"tool rule must be one of {', '.join(RULES)}")
+        if self.tool == "laser" and self.rule == "z":
+            raise ValueError("a laser takes S, not Z: Z is its focus")
+        if not set(self.features) <= FEATURES:
+            raise ValueError(f"build options must be among {', '.join(sorted(FEATURES))}")
+        if not 1 <= self.scale_q16 <= 1 << 24:
+            raise ValueError("scale must be 1/65536..256")
         self._check_motion()
+
+    @property
+    def tool_rule(self) -> str:
+        return self.rule or ("s" if self.tool == "laser" else "z")
+
+    @property
+    def pen_like(self) -> bool:
+        return self.tool != "laser"
+
+    @property
+    def z_home_um(self) -> int:
+        """Z of G28/G30 until G28.1/G30.1 store one: 5 mm above the tool-down threshold."""
+        return self.pen_z_um + 5000
 
     def _check_motion(self) -> None:
         if not (self.sample_hz >= 100 and self.tick_hz % self.sample_hz == 0):
@@ -126,7 +167,9 @@ class MachineConfig:
 
     def pen_duty(self, down: bool) -> int:
         """OCR2A of the pen up or down (pen: 0 / 255; servo: the pulse in 64 us counts)."""
-        if self.tool == "pen":
+        if self.tool == "none":
+            return 0
+        if self.tool != "servo":
             return 255 if down else 0
         deg = self.servo_down_deg if down else self.servo_up_deg
         return (SERVO_MIN_US + deg * (SERVO_MAX_US - SERVO_MIN_US) // 180) // SERVO_US_PER_COUNT
@@ -156,11 +199,21 @@ class MachineConfig:
 
     def tool_defines(self) -> dict[str, str]:
         pen = self.tool != "laser"
-        return {"NNIK_GC_TOOL": "1" if pen else "0", "NNIK_GC_S_MAX": f"{self.s_max}L",
+        out = {"NNIK_GC_TOOL": "1" if pen else "0", "NNIK_GC_S_MAX": f"{self.s_max}L",
                 "NNIK_GC_PEN_Z_UM": f"{self.pen_z_um}L",
                 "NNIK_GC_PEN_UP_DUTY": str(self.pen_duty(False) if pen else 0),
                 "NNIK_GC_PEN_DOWN_DUTY": str(self.pen_duty(True) if pen else 0),
-                "NNIK_GC_TOOL_CS": "7" if self.tool == "servo" else "4"}
+                "NNIK_GC_TOOL_CS": "7" if self.tool == "servo" else "4",
+                "NNIK_GC_RULE": str(RULES.index(self.tool_rule)), "NNIK_GC_MARLIN": str(int(self.marlin)),
+                "NNIK_GC_M300_DOWN": f"{self.m300_down_max * 1000}L",
+                **{f"NNIK_GC_{f.upper()}": str(int(f in self.features)) for f in sorted(FEATURES)}}
+        framed = self.scale_q16 != SCALE_ONE or any(self.shift_um)
+        out.update({"NNIK_GC_FRAME": str(int(framed)), "NNIK_GC_SCALE_Q16": f"{self.scale_q16}L",
+                    "NNIK_GC_SHIFT_X_UM": f"{self.shift_um[0]}L", "NNIK_GC_SHIFT_Y_UM": f"{self.shift_um[1]}L"})
+        (x0, y0), (x1, y1) = self.bounds_um if self.bounds_um is not None else ((0, 0), (0, 0))
+        out.update({"NNIK_GC_SOFT_LIMITS": str(int(self.bounds_um is not None)), "NNIK_GC_MIN_X_UM": f"{x0}L",
+                    "NNIK_GC_MIN_Y_UM": f"{y0}L", "NNIK_GC_MAX_X_UM": f"{x1}L", "NNIK_GC_MAX_Y_UM": f"{y1}L"})
+        return out
 
 
 def default_machine(scn, shaper: str | None = None) -> MachineConfig:
@@ -178,7 +231,9 @@ def default_machine(scn, shaper: str | None = None) -> MachineConfig:
         raise ValueError("shaper 'auto' is not available yet (it picks by contour error: the lead's part of issue 18)")
     taps = () if sh == "none" else shaper_taps(sh, dyn, sample_hz)
     um = lambda key, default, k=1000.0: int(round(float(mo.get(key, default)) * k))  # noqa: E731
-    return MachineConfig(origin_um=tuple(int(v) for v in (lo + hi) // 2), tool=kind,
+    origin = tuple(int(v) for v in (lo + hi) // 2)
+    bounds = tuple(tuple(int(v) - o for v, o in zip(e, origin)) for e in (lo, hi))
+    return MachineConfig(origin_um=origin, tool=kind, bounds_um=bounds, features=UNO_FEATURES,
                          accel_um_s2=(um("accel_x_mm_s2", 1000.0), um("accel_y_mm_s2", 1000.0)),
                          junction_dev_um=um("junction_deviation_mm", 0.01), max_feed_um_min=um("max_feed_mm_min", 3000.0),
                          sample_hz=sample_hz, shaper=sh, shaper_taps=taps, **tool)

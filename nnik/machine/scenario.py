@@ -101,8 +101,11 @@ TARGET = {
 
 
 TOOL = {  # the G-code firmware's tool on D11 (nnik.firmware.config.MachineConfig)
-    "kind": Param("str", default="laser", choices=("laser", "pen", "servo"),
-                  doc="laser: M3/M4/M5 with S; pen: Z above pen_z_um lifts it; servo: the same, as a servo angle"),
+    "kind": Param("str", default="laser", choices=("laser", "pen", "servo", "spindle", "knife", "none"),
+                  doc="laser: M3/M4/M5 with S, Z its focus; pen, spindle, knife: down at or below pen_z_um "
+                      "(D11 high); servo: the same, as a servo angle; none: nothing on D11"),
+    "m300_down_max": Param("int", default=40, check=lambda v: None if 0 <= v <= 10000 else f"must be in [0, 10000], got {v}",
+                           doc="a servo-pen file's M300 S at or below this puts the pen down (unicorn: 30 down, 50 up)"),
     "s_max": Param("int", default=1000, check=lambda v: None if 1 <= v <= 9999 else f"must be in [1, 9999], got {v}",
                    doc="S of full laser power (grbl's $30)"),
     "pen_z_um": Param("int", default=0, check=lambda v: None if abs(v) <= 1_000_000 else f"must be within +/-1 m, got {v}",

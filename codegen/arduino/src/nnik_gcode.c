@@ -1,179 +1,92 @@
 /*
- * nnik_gcode.c - see nnik_gcode.h.  Every rounding here is spelled out because
- * nnik.firmware.gcode (Python) repeats it bit for bit: numbers are parsed to whole micrometres
- * with round half away from zero, arc midpoints are rounded half away from zero, square roots
- * are floors; the planner (nnik_plan.c) and the shaper (nnik_shaper.c) state theirs.
+ * nnik_gcode.c - see nnik_gcode.h.  The interpreter and the motion it hands to the planner;
+ * nnik/firmware/gcode/interpreter.py repeats it bit for bit.  Positions are machine micrometres
+ * less the work origin (mp: X, Y and the tool's Z); an absolute target is the value plus the
+ * active work offset (G54..G59 by G10), the G92 offset and for Z the tool length offset; G53
+ * takes machine values; G91 adds to the position.  Every block end passes the job's frame
+ * transform (p * NNIK_GC_SCALE_Q16 / 2^16 + shift, rounded half up) when the build has one.
  */
-#include "nnik_gcode.h"
+#include "nnik_gc_block.h"
+#include "nnik_gc_geom.h"
 #include "nnik_gcode_config.h"
-#include "nnik_flash.h"
+#include "nnik_imath.h"
 
-#if NNIK_GC_SEG_UM < 100 || NNIK_GC_SEG_UM > 5000
-#error "NNIK_GC_SEG_UM must be 100..5000 um"
-#endif
 #if NNIK_GC_TICK_HZ > 12000
 #error "NNIK_GC_TICK_HZ above 12 kHz overflows the 32-bit tick count"
 #endif
-
-#if defined(__GNUC__)
-#define NNIK_NOINLINE __attribute__((noinline)) /* a rare path kept out of nnik_gc_line: ~1 KB less on AVR */
-#else
-#define NNIK_NOINLINE
+#ifndef NNIK_GC_RULE
+#define NNIK_GC_RULE 0 /* 0 s, 1 z, 2 e, 3 m300, 4 none */
+#endif
+#ifndef NNIK_GC_MARLIN
+#define NNIK_GC_MARLIN 0
+#endif
+#ifndef NNIK_GC_FRAME
+#define NNIK_GC_FRAME 0 /* 1: the job's frame transform (--fit, --scale, --offset) */
+#endif
+#ifndef NNIK_GC_SOFT_LIMITS
+#define NNIK_GC_SOFT_LIMITS 0 /* 1: ALARM:2 on a block end beyond the travel */
+#endif
+#ifndef NNIK_GC_M300_DOWN
+#define NNIK_GC_M300_DOWN 40000L
 #endif
 
-#define POS_LIMIT 268435455L /* 2^28 - 1 um: arc sums stay in int32, products in int64 */
+#define POS_LIMIT 268435455L /* 2^28 - 1 um */
 #define MIN_FEED 1000L       /* um per minute */
-#define ARC_STACK 32
-#define SAMPLE_TICKS (NNIK_GC_TICK_HZ / NNIK_GC_SAMPLE_HZ) /* stepper ticks per sample */
+#define SAMPLE_TICKS (NNIK_GC_TICK_HZ / NNIK_GC_SAMPLE_HZ)
 #if NNIK_GC_TICK_HZ % NNIK_GC_SAMPLE_HZ
 #error "NNIK_GC_SAMPLE_HZ must divide NNIK_GC_TICK_HZ"
 #endif
-#define TOOL_SCALED 0x100 /* a tool word: duty | TOOL_SCALED (M4: duty * the segment's speed / feed) */
-#define S_FULL (NNIK_GC_S_MAX * 1000L) /* S at full power, in thousandths */
-
-#if NNIK_GC_S_MAX < 1 || NNIK_GC_S_MAX > 9999
-#error "NNIK_GC_S_MAX must be 1..9999"
+#define TOOL_SCALED 0x100
+#define S_FULL (NNIK_GC_S_MAX * 1000L)
+#define Z_HOME (NNIK_GC_PEN_Z_UM + 5000L)
+#define DWELL_MS_MAX 16777215L
+#if NNIK_GC_TOOL == 1
+#define OFF_DUTY NNIK_GC_PEN_UP_DUTY
+#else
+#define OFF_DUTY 0
 #endif
 
-static NNIK_FLASH const char M_LONG[] = "line too long";
-static NNIK_FLASH const char M_COMMENT[] = "unterminated comment";
-static NNIK_FLASH const char M_CHAR[] = "unexpected character";
-static NNIK_FLASH const char M_WORD[] = "unsupported word %c";
-static NNIK_FLASH const char M_BADNUM[] = "bad number after %c";
-static NNIK_FLASH const char M_BIG[] = "number too large after %c";
-static NNIK_FLASH const char M_DEC[] = "too many decimals after %c";
-static NNIK_FLASH const char M_INT[] = "%c needs a whole number";
-static NNIK_FLASH const char M_CMD[] = "unsupported %c%d";
-static NNIK_FLASH const char M_REPEAT[] = "repeated word %c";
-static NNIK_FLASH const char M_TWO[] = "two motion commands";
-static NNIK_FLASH const char M_IJ[] = "I/J need G2 or G3";
-static NNIK_FLASH const char M_RG[] = "R needs G2 or G3";
-static NNIK_FLASH const char M_ARCIJ[] = "arc needs I, J or R";
-static NNIK_FLASH const char M_RIJ[] = "arc with both R and I/J";
-static NNIK_FLASH const char M_RFULL[] = "R arc ends at its start";
-static NNIK_FLASH const char M_CHORD[] = "arc chord longer than 2|R|";
-static NNIK_FLASH const char M_FEED[] = "feed below 1 mm/min";
-static NNIK_FLASH const char M_RANGE[] = "coordinate out of range";
-static NNIK_FLASH const char M_R0[] = "arc radius is zero";
-static NNIK_FLASH const char M_OFF[] = "arc end is off the circle";
-static NNIK_FLASH const char M_CMDF[] = "unsupported G%d.%c";
-static NNIK_FLASH const char M_SUMBAD[] = "bad checksum";
-static NNIK_FLASH const char M_SUM[] = "checksum mismatch";
-static NNIK_FLASH const char M_PAUSE[] = "M%d pause not supported";
-static NNIK_FLASH const char M_NONMODAL[] = "two non-modal commands";
-static NNIK_FLASH const char M_AXES[] = "G%d needs X or Y";
-static NNIK_FLASH const char M_WITH[] = "G%d with a motion command";
-static NNIK_FLASH const char M_DWELL[] = "G4 needs P >= 0";
-static NNIK_FLASH const char M_P[] = "P needs G4";
-static NNIK_FLASH const char M_TOOL2[] = "two tool commands";
-static NNIK_FLASH const char M_NEG[] = "negative %c";
-static NNIK_FLASH const char M_ZG[] = "Z needs G0 to G3";
+#if defined(__GNUC__)
+#define NOINLINE __attribute__((noinline))
+#else
+#define NOINLINE
+#endif
 
-/* message = flash template with %c -> ch, %d -> num */
-static int8_t fail(nnik_gc_t *g, const char *tmpl, char ch, int32_t num)
-{
-    uint8_t i = 0, k;
-    char c, digits[11];
-    while ((c = (char)NNIK_RD_U8(tmpl++)) != 0 && i < sizeof g->msg - 12) {
-        if (c != '%') {
-            g->msg[i++] = c;
-            continue;
-        }
-        c = (char)NNIK_RD_U8(tmpl++);
-        if (c == 'c') {
-            g->msg[i++] = ch;
-        } else {
-            uint32_t u = num < 0 ? (uint32_t)0 - (uint32_t)num : (uint32_t)num;
-            if (num < 0)
-                g->msg[i++] = '-';
-            k = 0;
-            do {
-                digits[k++] = (char)('0' + u % 10);
-                u /= 10;
-            } while (u);
-            while (k)
-                g->msg[i++] = digits[--k];
-        }
-    }
-    g->msg[i] = 0;
-    return -1;
-}
+static int32_t iabs32(int32_t v) { return v < 0 ? -v : v; }
 
-/* floor(sqrt(v)) bit by bit, in the width of T (one body for both widths) */
-#define NNIK_ISQRT_BODY(T, v)                                                                   \
-    T r = 0, b = (T)1 << (sizeof(T) * 8 - 2);                                                   \
-    while (b > v)                                                                               \
-        b >>= 2;                                                                                \
-    while (b) {                                                                                 \
-        if (v >= r + b) {                                                                       \
-            v -= r + b;                                                                         \
-            r = (r >> 1) + b;                                                                   \
-        } else {                                                                                \
-            r >>= 1;                                                                            \
-        }                                                                                       \
-        b >>= 2;                                                                                \
-    }                                                                                           \
-    return (uint32_t)r
-
-uint32_t nnik_isqrt32(uint32_t v)
-{
-    NNIK_ISQRT_BODY(uint32_t, v);
-}
-
-uint32_t nnik_isqrt64(uint64_t v)
-{
-    if (v < 0x100000000ULL)
-        return nnik_isqrt32((uint32_t)v); /* 32-bit arithmetic: far cheaper on AVR */
-    {
-        NNIK_ISQRT_BODY(uint64_t, v);
-    }
-}
+void nnik_gc_read_reset(nnik_gc_t *g);
 
 void nnik_gc_init(nnik_gc_t *g, nnik_gc_emit_fn emit)
 {
-    int32_t in[2];
-    in[0] = NNIK_GC_ORIGIN_X_UM;
-    in[1] = NNIK_GC_ORIGIN_Y_UM;
-    g->pos[0] = g->pos[1] = 0;
-    g->off[0] = g->off[1] = 0;
+    const int32_t at[2] = {0, 0};
+    g->emit = emit;
+    nnik_gc_place(g, at);
+}
+
+void nnik_gc_place(nnik_gc_t *g, const int32_t pt[2])
+{
+    uint8_t *p = (uint8_t *)g;
+    uint16_t i;
+    int32_t in[2], at[2];
+    nnik_gc_emit_fn emit = g->emit;
+    at[0] = pt[0]; /* pt may lie in *g */
+    at[1] = pt[1];
+    for (i = 0; i < sizeof *g; i++)
+        p[i] = 0;
+    g->mp[0] = g->pt[0] = at[0];
+    g->mp[1] = g->pt[1] = at[1];
+    in[0] = NNIK_GC_ORIGIN_X_UM + at[0];
+    in[1] = NNIK_GC_ORIGIN_Y_UM + at[1];
     NNIK_GC_IK(in, g->steps);
     g->feed = NNIK_GC_FEED_UM_MIN;
-    g->line_no = 0;
-    g->segments = 0;
-    g->blocks = 0;
-    g->samples = 0;
-    g->overspeed = 0;
-    g->settle = 0;
-    g->tail_tool = 0;
-    g->clamped = 0;
-    g->pt[0] = g->pt[1] = 0;
+    g->home[0][2] = g->home[1][2] = Z_HOME;
     nnik_pl_init(&g->pl, g->pt);
     nnik_sh_init(&g->sh, g->pt);
-    g->motion = 0;
-    g->spindle = 0;
-    g->s = 0;
-    g->z = 0;
-    g->tool = g->last_tool = 0;
-    g->duty = 0;
-    g->inch = 0;
-    g->relative = 0;
     g->emit = emit;
-    g->msg[0] = 0;
+    nnik_gc_read_reset(g);
 }
 
-int8_t nnik_gc_too_long(nnik_gc_t *g)
-{
-    g->line_no++;
-    return fail(g, M_LONG, 0, 0);
-}
-
-/* ---------------------------------------------------------------- motion */
-static int32_t iabs32(int32_t v) { return v < 0 ? -v : v; }
-
-/* One stepper segment per sample: shape the planned point, IK, steps from the last sample, and
- * the sample's ticks (stretched to the larger step count if the motors would need more than one
- * step per tick: an overspeed, counted).  M4: the duty scales by the sample's planned speed over
- * its block's nominal speed. */
+/* ---------------------------------------------------------------- segments */
 static void out_sample(nnik_gc_t *g, const int32_t p[2], uint16_t tool, uint32_t v, uint32_t vn)
 {
     int32_t in[2], out[2], d[2];
@@ -217,7 +130,7 @@ void nnik_gc_flush(nnik_gc_t *g)
     int32_t p[2];
     while (nnik_pl_ready(&g->pl, 1))
         sample(g);
-    p[0] = g->pl.start[0]; /* at rest at the last block's end: the shaper's tail holds it */
+    p[0] = g->pl.start[0];
     p[1] = g->pl.start[1];
     while (g->settle) {
         g->settle--;
@@ -225,214 +138,8 @@ void nnik_gc_flush(nnik_gc_t *g)
     }
 }
 
-/* A block from g->pos to (x, y), once the planner has room (sampling the head block if full). */
-static void seg_to(nnik_gc_t *g, int32_t x, int32_t y, int32_t feed)
-{
-    while (nnik_pl_ready(&g->pl, 0))
-        sample(g);
-    nnik_pl_push(&g->pl, g->off[0] + x, g->off[1] + y, feed, g->tool);
-    g->last_tool = g->tool;
-    g->pos[0] = x;
-    g->pos[1] = y;
-    g->blocks++;
-}
-
-static void line_to(nnik_gc_t *g, int32_t x, int32_t y, int32_t feed)
-{
-    if (x == g->pos[0] && y == g->pos[1])
-        return;
-    seg_to(g, x, y, feed);
-}
-
-/* round(a / b) half away from zero, b > 0 */
-static int32_t div_round(int64_t a, uint32_t b)
-{
-    uint64_t u = a < 0 ? (uint64_t)(-a) : (uint64_t)a;
-    int32_t q;
-    if (u < 0x40000000UL && b < 0x40000000UL) /* the same value by 32-bit division: far cheaper on AVR */
-        q = (int32_t)((2 * (uint32_t)u + b) / (2 * b));
-    else
-        q = (int32_t)((2 * u + b) / (2 * (uint64_t)b));
-    return a < 0 ? -q : q;
-}
-
-/* x^2 + y^2; with 16-bit operands in 32-bit arithmetic (the same value, far cheaper on AVR) */
-static uint64_t sq2(int32_t x, int32_t y)
-{
-    if (x > -32768L && x < 32768L && y > -32768L && y < 32768L)
-        return (uint32_t)(x * x) + (uint32_t)(y * y);
-    return (uint64_t)((int64_t)x * x) + (uint64_t)((int64_t)y * y);
-}
-
-/* x * r, r >= 0, likewise */
-static int64_t mul_r(int32_t x, uint32_t r)
-{
-    if (x > -65536L && x < 65536L && r < 65536UL) {
-        uint32_t p = (uint32_t)(x < 0 ? -x : x) * r;
-        return x < 0 ? -(int64_t)p : (int64_t)p;
-    }
-    return (int64_t)x * (int64_t)r;
-}
-
-static uint64_t chord2(const int32_t a[2], const int32_t b[2])
-{
-    return sq2(b[0] - a[0], b[1] - a[1]);
-}
-
-/* Bisect the arc cur -> end (vectors from the centre, at most a quarter turn) until every
- * chord is <= SEG; midpoints are (a + b) scaled to radius r. */
-static void arc_piece(nnik_gc_t *g, const int32_t c[2], int32_t cur[2], const int32_t end[2], uint32_t r,
-                      int32_t feed)
-{
-    static int32_t stack[ARC_STACK][2];
-    uint8_t top = 0;
-    const uint64_t seg2 = (uint64_t)NNIK_GC_SEG_UM * NNIK_GC_SEG_UM;
-    stack[0][0] = end[0];
-    stack[0][1] = end[1];
-    top = 1;
-    while (top) {
-        int32_t *b = stack[top - 1];
-        if (chord2(cur, b) <= seg2 || top == ARC_STACK) {
-            cur[0] = b[0];
-            cur[1] = b[1];
-            top--;
-            seg_to(g, c[0] + cur[0], c[1] + cur[1], feed);
-        } else {
-            int32_t mx = cur[0] + b[0], my = cur[1] + b[1];
-            uint32_t m = nnik_isqrt64(sq2(mx, my));
-            stack[top][0] = div_round(mul_r(mx, r), m);
-            stack[top][1] = div_round(mul_r(my, r), m);
-            top++;
-        }
-    }
-}
-
-static void arc_to(nnik_gc_t *g, const int32_t c[2], const int32_t end[2], uint32_t r, int8_t dir,
-                   int32_t feed)
-{
-    int32_t cur[2], e[2], nxt[2];
-    cur[0] = g->pos[0] - c[0];
-    cur[1] = g->pos[1] - c[1];
-    e[0] = end[0] - c[0];
-    e[1] = end[1] - c[1];
-    for (;;) {
-        int64_t cross = (int64_t)cur[0] * e[1] - (int64_t)cur[1] * e[0];
-        int64_t dot = (int64_t)cur[0] * e[0] + (int64_t)cur[1] * e[1];
-        if (dir < 0)
-            cross = -cross;
-        if (cross > 0 && dot >= 0) {
-            arc_piece(g, c, cur, e, r, feed);
-            return;
-        }
-        nxt[0] = dir > 0 ? -cur[1] : cur[1];
-        nxt[1] = dir > 0 ? cur[0] : -cur[0];
-        arc_piece(g, c, cur, nxt, r, feed);
-    }
-}
-
-/* The centre of an R-form arc as an offset ij from its start, for the chord (x, y) and the
- * radius rad (not zero; negative: the long way round), dir > 0 for G3; 0 or an error template.
- *     ij = (x, y) / 2 + sign * (-y, x) * s / (2 d),  s = floor(sqrt(4 rad^2 - d^2))
- * (s = 0 when the chord is longer than 2|rad| by at most the end tolerance), rounded half away
- * from zero, with d = |(x, y)| taken as floor(d * 2^k) / 2^k, 2^29 <= d * 2^k < 2^30: every
- * product stays below 2^61.  The centre lies left of the chord for G3 with a positive R. */
-NNIK_NOINLINE static const char *r_centre(int32_t x, int32_t y, int32_t rad, int8_t dir, int32_t ij[2])
-{
-    uint64_t d2 = sq2(x, y), d2s = d2, r2x4;
-    uint32_t ra = (uint32_t)iabs32(rad), s = 0, ds;
-    int32_t xs = x, ys = y; /* (x, y) * 2^k: |.| <= d * 2^k < 2^30 */
-    if (d2 == 0)
-        return M_RFULL;
-    r2x4 = 4 * (uint64_t)ra * ra;
-    if (r2x4 < d2) {
-        if (nnik_isqrt64(d2) > 2 * ra + 5 + ra / 1000)
-            return M_CHORD;
-    } else {
-        s = nnik_isqrt64(r2x4 - d2);
-    }
-    while (d2s < (1ULL << 58)) {
-        d2s <<= 2;
-        xs *= 2;
-        ys *= 2;
-    }
-    ds = nnik_isqrt64(d2s);
-    if ((dir > 0) != (rad > 0)) {
-        xs = -xs;
-        ys = -ys;
-    }
-    ij[0] = div_round(mul_r(x, ds) - mul_r(ys, s), 2 * ds);
-    ij[1] = div_round(mul_r(y, ds) + mul_r(xs, s), 2 * ds);
-    return 0;
-}
-
-/* ---------------------------------------------------------------- parsing */
-typedef struct {
-    uint8_t have, neg, dot, nd;
-    uint16_t ip;
-    uint32_t fr;
-} num_t;
-
-enum { W_X, W_Y, W_I, W_J, W_R, W_F, W_P, W_S, W_Z, W_COUNT };
-
-/* scan [+-]digits[.digits] at *ps; 0 or an error template */
-static const char *scan_num(const char **ps, num_t *n)
-{
-    const char *s = *ps;
-    uint8_t digits = 0;
-    n->neg = n->dot = n->nd = 0;
-    n->ip = 0;
-    n->fr = 0;
-    if (*s == '+' || *s == '-')
-        n->neg = (*s++ == '-');
-    while (*s >= '0' && *s <= '9') {
-        if (n->ip > 999) /* a fifth digit */
-            return M_BIG;
-        n->ip = (uint16_t)(n->ip * 10 + (*s++ - '0'));
-        digits++;
-    }
-    if (*s == '.') {
-        s++;
-        n->dot = 1;
-        while (*s >= '0' && *s <= '9') {
-            if (n->nd == 6)
-                return M_DEC;
-            n->fr = n->fr * 10 + (uint32_t)(*s++ - '0');
-            n->nd++;
-            digits++;
-        }
-    }
-    if (!digits)
-        return M_BADNUM;
-    *ps = s;
-    n->have = 1;
-    return 0;
-}
-
-/* the number in um (or um/min): int * scale + round_half_up(frac * scale / 10^nd), signed */
-static int32_t to_um(const num_t *n, uint8_t inch)
-{
-    uint32_t scale = inch ? 25400UL : 1000UL, p = 1, f;
-    uint8_t k;
-    int32_t v;
-    for (k = 0; k < n->nd; k++)
-        p *= 10;
-    if (n->nd < 6)
-        f = (n->fr * scale + p / 2) / p;
-    else /* six decimals (Inkscape's gcodetools writes %f): fr * 25400 needs 35 bits */
-        f = (uint32_t)(((uint64_t)n->fr * scale + p / 2) / p);
-    v = (int32_t)((uint32_t)n->ip * scale + f);
-    return n->neg ? -v : v;
-}
-
-/* the dwell of G4 P (seconds, rounded to ms) in ticks, rounded down; ms < 2^24 */
-static uint32_t dwell_ticks(uint32_t ms)
-{
-    return ms / 1000 * NNIK_GC_TICK_HZ + ms % 1000 * NNIK_GC_TICK_HZ / 1000;
-}
-
-/* a segment without steps: ticks of the stepper at rest with the tool word t (fixed), after the
- * planned motion has come to rest (a stop block) */
-static void rest(nnik_gc_t *g, uint32_t ticks, uint16_t t)
+/* a segment without steps, once the planned motion is at rest */
+NOINLINE static void rest(nnik_gc_t *g, uint32_t ticks, uint16_t t)
 {
     int32_t d[2] = {0, 0};
     nnik_gc_flush(g);
@@ -442,324 +149,533 @@ static void rest(nnik_gc_t *g, uint32_t ticks, uint16_t t)
     g->emit(g, d, ticks);
 }
 
-/* the tool word at rest (laser: off, as grbl's laser mode; pen: up or down by Z) */
-static uint16_t idle_tool(const nnik_gc_t *g)
+/* a block to the machine point p (X, Y): the transform, the soft limits, the planner */
+NOINLINE static int8_t push(nnik_gc_t *g, const int32_t p[2], int32_t feed)
+{
+    int32_t e[2];
+    e[0] = p[0];
+    e[1] = p[1];
+#if NNIK_GC_FRAME
+    e[0] = (int32_t)(((int64_t)p[0] * NNIK_GC_SCALE_Q16 + 32768) >> 16) + NNIK_GC_SHIFT_X_UM;
+    e[1] = (int32_t)(((int64_t)p[1] * NNIK_GC_SCALE_Q16 + 32768) >> 16) + NNIK_GC_SHIFT_Y_UM;
+#endif
+#if NNIK_GC_SOFT_LIMITS
+    if (e[0] < NNIK_GC_MIN_X_UM || e[0] > NNIK_GC_MAX_X_UM || e[1] < NNIK_GC_MIN_Y_UM || e[1] > NNIK_GC_MAX_Y_UM) {
+        g->alarm = 2;
+        return NNIK_GC_ALARM(2);
+    }
+#endif
+    if (g->check)
+        return 0;
+    while (nnik_pl_ready(&g->pl, 0))
+        sample(g);
+    nnik_pl_push(&g->pl, e[0], e[1], feed, g->tool);
+    g->last_tool = g->tool;
+    g->blocks++;
+    return 0;
+}
+
+/* ---------------------------------------------------------------- the tool */
+#if NNIK_GC_TOOL == 1 && NNIK_GC_RULE == 1
+static int32_t work_z(const nnik_gc_t *g)
+{
+    return g->mp[2] - (g->coord[g->wcs][2] + g->g92[2] + g->tlo);
+}
+#endif
+
+NOINLINE static uint16_t idle_tool(const nnik_gc_t *g)
 {
 #if NNIK_GC_TOOL == 1
-    return g->z > NNIK_GC_PEN_Z_UM ? NNIK_GC_PEN_UP_DUTY : NNIK_GC_PEN_DOWN_DUTY;
+#if NNIK_GC_RULE == 1
+    uint8_t down = work_z(g) <= NNIK_GC_PEN_Z_UM;
+#elif NNIK_GC_RULE == 0
+    uint8_t down = g->spindle && g->s > 0;
+#elif NNIK_GC_RULE == 3
+    uint8_t down = g->pen;
+#else
+    uint8_t down = 0;
+    (void)g;
+#endif
+    return down ? NNIK_GC_PEN_DOWN_DUTY : NNIK_GC_PEN_UP_DUTY;
 #else
     (void)g;
     return 0;
 #endif
 }
 
-/* the tool word of a move (laser: off for rapids and M5, S's duty for M3, scaled for M4) */
-static uint16_t move_tool(const nnik_gc_t *g, uint8_t rapid)
+NOINLINE static uint16_t move_tool(const nnik_gc_t *g, uint8_t rapid, uint8_t extrude)
 {
-#if NNIK_GC_TOOL == 1
+#if NNIK_GC_RULE == 2
+    (void)g;
     (void)rapid;
-    return idle_tool(g);
+#if NNIK_GC_TOOL == 1
+    return extrude ? NNIK_GC_PEN_DOWN_DUTY : OFF_DUTY;
 #else
+    return extrude ? 255 : 0;
+#endif
+#elif NNIK_GC_TOOL == 1
+    (void)rapid;
+    (void)extrude;
+    return idle_tool(g);
+#elif NNIK_GC_RULE == 0
     uint16_t t;
+    (void)extrude;
     if (rapid || !g->spindle)
         return 0;
     t = (uint16_t)((uint32_t)(g->s < S_FULL ? g->s : S_FULL) * 255UL / (uint32_t)S_FULL);
     return g->spindle == 4 ? t | TOOL_SCALED : t;
+#else
+    (void)g;
+    (void)rapid;
+    (void)extrude;
+    return 0;
 #endif
 }
 
-/* '*nn' at s: the checksum; 0 or an error template */
-static const char *checksum(const char *s, uint8_t x)
+/* ---------------------------------------------------------------- moves */
+NOINLINE static int8_t line_to(nnik_gc_t *g, const int32_t t[3], int32_t feed, uint8_t rapid, uint8_t extrude)
 {
-    uint16_t v = 0;
-    uint8_t digits = 0;
-    while (*s >= '0' && *s <= '9') {
-        v = (uint16_t)(v * 10 + (*s++ - '0'));
-        if (++digits > 3)
-            return M_SUMBAD;
+    g->mp[2] = t[2];
+    g->tool = move_tool(g, rapid, extrude);
+    if (t[0] != g->mp[0] || t[1] != g->mp[1]) {
+        int8_t r = push(g, t, feed);
+        if (r)
+            return r;
+        g->mp[0] = t[0];
+        g->mp[1] = t[1];
     }
-    while (*s == ' ' || *s == '\t' || *s == '\r')
-        s++;
-    if (!digits || *s || v > 255)
-        return M_SUMBAD;
-    return v == x ? 0 : M_SUM;
+    return 0;
 }
 
-static void tool_state(nnik_gc_t *g, const num_t *s, uint8_t spindle, int32_t z)
+typedef struct {
+    nnik_gc_t *g;
+    int32_t feed;
+    uint8_t a0, a1, extrude, measure, per_point;
+    int32_t c[2];
+    int32_t last[2];
+    uint32_t length;
+    int8_t err;
+} walk_t;
+
+/* one chord end q (in the plane, from the centre; Bezier: absolute X Y) */
+static void chord_end(void *ctx, const int32_t q[2])
 {
-    if (s->have)
-        g->s = to_um(s, 0);
-    if (spindle != 0xff)
-        g->spindle = spindle == 5 ? 0 : spindle;
-    g->z = z;
+    walk_t *w = (walk_t *)ctx;
+    nnik_gc_t *g = w->g;
+    int32_t p[3];
+    if (w->err)
+        return;
+    p[0] = g->mp[0];
+    p[1] = g->mp[1];
+    p[2] = g->mp[2];
+    p[w->a0] = w->c[0] + q[0];
+    p[w->a1] = w->c[1] + q[1];
+    if (w->measure) {
+        w->length += nnik_isqrt64(nnik_sq2(p[0] - w->last[0], p[1] - w->last[1]));
+        w->last[0] = p[0];
+        w->last[1] = p[1];
+        return;
+    }
+    if (w->per_point) {
+        g->mp[2] = p[2];
+        g->tool = move_tool(g, 0, w->extrude);
+    }
+    if (p[0] != g->mp[0] || p[1] != g->mp[1]) {
+        w->err = push(g, p, w->feed);
+        g->mp[0] = p[0];
+        g->mp[1] = p[1];
+    }
 }
 
-int8_t nnik_gc_line(nnik_gc_t *g, const char *line)
+#if NNIK_GC_G93
+/* G93: the move takes 1/F minutes: feed = length * F (F in thousandths per minute) */
+static int32_t inverse_feed(uint32_t length, int32_t inv_f)
 {
-    char buf[NNIK_GC_LINE_MAX + 1];
-    const char *s;
-    const char *err;
-    uint8_t i = 0, in_comment = 0, wait = 0, motion = 0xff, inch = g->inch, rel = g->relative, x = 0;
-    uint8_t nonmodal = 0; /* 4, 28, 92 */
-    uint8_t spindle = 0xff;  /* M3, M4, M5 */
-    uint32_t blk0 = g->blocks;
-    num_t w[W_COUNT];
-    int32_t tgt[2], feed, tz;
-    char c;
-
-    g->line_no++;
-    /* strip blanks and comments, upper-case; '*' ends the line: a checksum of the bytes before */
-    for (s = line; (c = *s) != 0; x ^= (uint8_t)c, s++) {
-        if (in_comment) {
-            if (c == ')')
-                in_comment = 0;
-            continue;
-        }
-        if (c == ';')
-            break;
-        if (c == '*') {
-            err = checksum(s + 1, x);
-            if (err)
-                return fail(g, err, 0, 0);
-            break;
-        }
-        if (c == '(') {
-            in_comment = 1;
-            continue;
-        }
-        if (c == ' ' || c == '\t' || c == '\r')
-            continue;
-        if (i == NNIK_GC_LINE_MAX)
-            return fail(g, M_LONG, 0, 0);
-        buf[i++] = (c >= 'a' && c <= 'z') ? (char)(c - 32) : c;
-    }
-    if (in_comment)
-        return fail(g, M_COMMENT, 0, 0);
-    buf[i] = 0;
-
-    for (i = 0; i < W_COUNT; i++)
-        w[i].have = 0;
-    if (buf[0] == '%' && !buf[1])
-        return 0; /* a program's first or last line ('%'), as CAM posts write it */
-    for (s = buf; *s;) {
-        num_t n;
-        char letter = *s++;
-        int8_t idx = -1;
-        if (letter < 'A' || letter > 'Z')
-            return fail(g, M_CHAR, 0, 0);
-        switch (letter) {
-        case 'X': idx = W_X; break;
-        case 'Y': idx = W_Y; break;
-        case 'I': idx = W_I; break;
-        case 'J': idx = W_J; break;
-        case 'R': idx = W_R; break;
-        case 'F': idx = W_F; break;
-        case 'P': idx = W_P; break;
-        case 'S': idx = W_S; break;
-#if NNIK_GC_TOOL == 1
-        case 'Z': idx = W_Z; break;
+    uint64_t f = (uint64_t)length * (uint32_t)inv_f / 1000;
+    return f < (uint64_t)MIN_FEED ? MIN_FEED : (f > 0x7fffffffUL ? 0x7fffffffL : (int32_t)f);
+}
 #endif
-        case 'N': /* a line number: up to 8 digits, read and ignored */
-            for (i = 0; *s >= '0' && *s <= '9'; s++)
-                if (++i > 8)
-                    return fail(g, M_BIG, letter, 0);
-            if (!i)
-                return fail(g, M_BADNUM, letter, 0);
-            continue;
-        case 'G': case 'M': break;
-        default: return fail(g, M_WORD, letter, 0);
-        }
-        err = scan_num(&s, &n);
-        if (err)
-            return fail(g, err, letter, 0);
-        if (idx >= 0) {
-            if (w[idx].have)
-                return fail(g, M_REPEAT, letter, 0);
-            w[idx] = n;
-            continue;
-        }
-        if (letter == 'G' && n.dot && !n.neg && n.nd == 1)
-            return fail(g, M_CMDF, (char)('0' + n.fr), n.ip);
-        if (n.neg || n.dot)
-            return fail(g, M_INT, letter, 0);
-        if (letter == 'G') {
-            switch (n.ip) {
-            case 0: case 1: case 2: case 3:
-                if (motion != 0xff)
-                    return fail(g, M_TWO, 0, 0);
-                motion = (uint8_t)n.ip;
-                break;
-            case 4: case 28: case 92:
-                if (nonmodal)
-                    return fail(g, M_NONMODAL, 0, 0);
-                nonmodal = (uint8_t)n.ip;
-                break;
-            case 20: case 21:
-                inch = n.ip == 20;
-                break;
-            case 90: case 91:
-                rel = n.ip == 91;
-                break;
-            case 17: case 40: case 49: case 54: case 64: case 80: case 94:
-                break; /* the only plane, compensation, coordinate system, path and feed mode */
-            default:
-                return fail(g, M_CMD, letter, n.ip);
-            }
-        } else if (n.ip == 2 || n.ip == 30) {
-            wait = 3;
-        } else if (n.ip == 400) {
-            wait |= 1;
-        } else if (n.ip <= 1) {
-            return fail(g, M_PAUSE, 0, n.ip);
-        } else if (n.ip >= 3 && n.ip <= 5) {
-            if (spindle != 0xff)
-                return fail(g, M_TOOL2, 0, 0);
-            spindle = (uint8_t)n.ip;
-        } else {
-            return fail(g, M_CMD, letter, n.ip);
-        }
-    }
 
-    /* check everything before anything changes */
-    if (nonmodal && motion != 0xff)
-        return fail(g, M_WITH, 0, nonmodal);
-    if (w[W_P].have && nonmodal != 4)
-        return fail(g, M_P, 0, 0);
-    if (w[W_S].have && w[W_S].neg)
-        return fail(g, M_NEG, 'S', 0);
-    if (w[W_Z].have && nonmodal)
-        return fail(g, M_ZG, 0, 0);
-    if (motion == 0xff)
-        motion = g->motion;
+/* the chord ends of an arc (about c, in the walk's plane) or a Bezier (c1 c2) to tgt */
+NOINLINE static void curve(nnik_gc_t *g, uint8_t motion, const int32_t c[2], const int32_t c1[2], const int32_t c2[2],
+                  const int32_t tgt[3], uint32_t rad, walk_t *w)
+{
+#if NNIK_GC_G5
+    if (motion == 5) {
+        int32_t p0[2];
+        p0[0] = g->mp[0];
+        p0[1] = g->mp[1];
+        w->c[0] = w->c[1] = 0;
+        nnik_gc_bezier(p0, c1, c2, tgt, chord_end, w);
+        return;
+    }
+#else
+    (void)c1;
+    (void)c2;
+#endif
+    nnik_gc_arc(g->mp[w->a0] - c[0], g->mp[w->a1] - c[1], tgt[w->a0] - c[0], tgt[w->a1] - c[1], rad, motion == 3,
+                chord_end, w);
+}
+
+/* the work offset of axis k in system wcs with the tool length offset tlo: machine = work + it */
+NOINLINE static int32_t woff(const nnik_gc_t *g, uint8_t wcs, int32_t tlo, uint8_t k)
+{
+    return g->coord[wcs][k] + g->g92[k] + (k == 2 ? tlo : 0);
+}
+
+/* ---------------------------------------------------------------- the line */
+#define V(w) (&b.v[w])
+/* letters read in the block's units (inches after G20): lengths and F */
+#define LENGTHS ((1U << W_E) | (1U << W_F) | (1U << W_I) | (1U << W_J) | (1U << W_K) | (1U << W_Q) | (1U << W_R) | \
+                 (1U << W_X) | (1U << W_Y) | (1U << W_Z))
+#define HASW(w) HAS(&b, w)
+
+static const uint8_t PLANE_AXES[3][2] = {{0, 1}, {2, 0}, {1, 2}};
+
+int8_t nnik_gc_exec(nnik_gc_t *g)
+{
+    static nnik_blk_t b; /* static: a small stack frame is far smaller code on AVR (ldd reaches 63 B) */
+    int8_t r;
+    uint8_t inch, rel, plane, arc_abs, inverse, wcs, motion, nm, k, axes = 0, moving, axis_nm, extrude = 0;
+    uint8_t e_rel, e_move, seg_blocks;
+    uint16_t used = (1U << W_F) | (1U << W_T) | (1U << W_S);
+    static int32_t u[W_COUNT];
+    int32_t feed, inv_f = 0, tlo, tgt[3], e_tgt, dwell_ms = -1;
+    int32_t c[2] = {0, 0}, c1[2] = {0, 0}, c2[2] = {0, 0};
+    uint32_t rad = 0;
+    uint32_t blk0;
+    static walk_t w;
+
+    r = nnik_gc_parse(g->line, &b);
+    if (r)
+        return r;
+    if (b.noted_line)
+        return NNIK_GC_OK;
+    motion = b.motion == UNSET ? g->motion : b.motion;
+    if ((HASW(W_F) && (V(W_F)->nd & NUM_NEG)) || (HASW(W_T) && (V(W_T)->nd & NUM_NEG)) ||
+        (HASW(W_S) && (V(W_S)->nd & NUM_NEG)) || (HASW(W_P) && (V(W_P)->nd & NUM_NEG) && motion != 5))
+        return -4;
+    if (HASW(W_T) && V(W_T)->ip > 255)
+        return -38;
+    inch = b.inch == UNSET ? g->inch : b.inch;
+    for (k = 0; k < W_COUNT; k++) /* every value once: lengths (and F, P of G5) in the block's units */
+        if (HASW(k))
+            u[k] = nnik_gc_um(V(k), inch && ((1U << k) & LENGTHS));
+    rel = b.relative == UNSET ? g->relative : b.relative;
+    plane = b.plane == UNSET ? g->plane : b.plane;
+    arc_abs = b.arc_abs == UNSET ? g->arc_abs : b.arc_abs;
+    inverse = b.inverse == UNSET ? g->inverse_time : b.inverse;
+    wcs = b.wcs == UNSET ? g->wcs : b.wcs;
+    nm = b.nonmodal;
+    if (b.m300 && !HASW(W_S))
+        return -28;
+    if (b.g64)
+        used |= (1U << W_P) | (1U << W_Q);
+    for (k = 0; k < 3; k++)
+        if (HASW(W_X + k))
+            axes |= (uint8_t)(1U << k);
+    tlo = g->tlo;
+    if (b.tlo == 1) {
+        if (!HASW(W_Z))
+            return -37;
+        tlo = u[W_Z];
+        used |= 1U << W_Z;
+        axes &= (uint8_t)~4U;
+    } else if (b.tlo == 0) {
+        tlo = 0;
+    } else if (b.tlo == 2) {
+        used |= 1U << W_H;
+    }
+    e_move = NNIK_GC_MARLIN && HASW(W_E) && nm != NM_G92;
+    axis_nm = nm == NM_G10 || nm == NM_G28 || nm == NM_G30 || nm == NM_G92;
+    if ((axes || e_move) && axis_nm && b.motion != UNSET && b.motion != 80)
+        return -24;
+    moving = (axes || e_move) && !axis_nm;
+    if (moving && motion == 80)
+        return -31;
+    if ((b.motion == 2 || b.motion == 3) && !axis_nm && !axes) /* an arc written without its end */
+        return -32;
+    /* feed */
     feed = g->feed;
-    if (w[W_F].have) {
-        feed = to_um(&w[W_F], inch);
-        if (feed < MIN_FEED)
-            return fail(g, M_FEED, 0, 0);
-    }
-    if ((w[W_I].have || w[W_J].have) && (motion < 2 || nonmodal))
-        return fail(g, M_IJ, 0, 0);
-    if (w[W_R].have && (motion < 2 || nonmodal))
-        return fail(g, M_RG, 0, 0);
-    for (i = 0; i < 2; i++) {
-        tgt[i] = g->pos[i];
-        if (w[i].have) {
-            int32_t v = to_um(&w[i], inch);
-            tgt[i] = rel && nonmodal != 92 ? g->pos[i] + v : v;
+    if (HASW(W_F)) {
+        if (inverse) {
+            inv_f = nnik_gc_um(V(W_F), 0);
+            if (inv_f < 1)
+                return -22;
+        } else {
+            feed = u[W_F];
+            if (feed < MIN_FEED)
+                return -22;
         }
-        if (tgt[i] > POS_LIMIT || tgt[i] < -POS_LIMIT)
-            return fail(g, M_RANGE, 0, 0);
     }
-    {
-        int32_t z = g->z;
-        if (w[W_Z].have) {
-            int32_t v = to_um(&w[W_Z], inch);
-            z = rel ? z + v : v;
-            if (z > POS_LIMIT || z < -POS_LIMIT)
-                return fail(g, M_RANGE, 0, 0);
+    if (inverse && moving && motion != 0 && !HASW(W_F))
+        return -22;
+    /* targets */
+    if (nm == NM_G53 && moving && motion > 1)
+        return -30;
+    for (k = 0; k < 3; k++) {
+        int32_t val;
+        tgt[k] = g->mp[k];
+        if (!(axes & (1U << k)))
+            continue;
+        val = u[W_X + k];
+        if (nm == NM_G53 || nm == NM_G92 || nm == NM_G10)
+            tgt[k] = val;
+        else if (rel)
+            tgt[k] = g->mp[k] + val;
+        else
+            tgt[k] = val + woff(g, wcs, tlo, k);
+        if (tgt[k] > POS_LIMIT || tgt[k] < -POS_LIMIT)
+            return -33;
+        used |= (uint16_t)(1U << (W_X + k));
+    }
+    /* E */
+    e_rel = b.e_rel == UNSET ? g->e_rel : b.e_rel;
+    if (b.relative != UNSET && b.e_rel == UNSET)
+        e_rel = b.relative;
+    e_tgt = g->e;
+    if (HASW(W_E)) {
+        int32_t ev = u[W_E];
+        used |= 1U << W_E;
+        if (ev > POS_LIMIT || ev < -POS_LIMIT)
+            return -33;
+        if (nm == NM_G92 || !e_rel) {
+            e_tgt = ev;
+            extrude = nm != NM_G92 && ev > g->e;
+        } else {
+            extrude = ev > 0;
         }
-        tz = z;
     }
-    if (nonmodal) {
-        uint8_t xy = w[W_X].have || w[W_Y].have;
-        int32_t v = w[W_P].have ? to_um(&w[W_P], 0) : -1;
-        if (nonmodal == 4 && (v < 0 || xy))
-            return fail(g, M_DWELL, 0, 0);
-        if (nonmodal == 92) {
-            int32_t o[2];
-            if (!xy)
-                return fail(g, M_AXES, 0, 92);
-            for (i = 0; i < 2; i++) {
-                o[i] = g->off[i] + g->pos[i] - tgt[i];
-                if (o[i] > POS_LIMIT || o[i] < -POS_LIMIT)
-                    return fail(g, M_RANGE, 0, 0);
+    /* checks of the non-modal commands */
+    if (nm == NM_G4) {
+        if (NNIK_GC_MARLIN && HASW(W_S) && !HASW(W_P)) {
+            dwell_ms = u[W_S];
+        } else if (HASW(W_P)) {
+            dwell_ms = nnik_gc_um(V(W_P), 0);
+            if (NNIK_GC_MARLIN)
+                dwell_ms = (dwell_ms + 500) / 1000;
+        } else if (NNIK_GC_MARLIN) {
+            dwell_ms = 0; /* Marlin: G4 alone waits for nothing */
+        } else {
+            return -28;
+        }
+        used |= 1U << W_P;
+        if (dwell_ms > DWELL_MS_MAX)
+            dwell_ms = DWELL_MS_MAX;
+    }
+#if NNIK_GC_WCS
+    if (nm == NM_G10) {
+        if (!HASW(W_L) || !HASW(W_P))
+            return -28;
+        used |= (1U << W_L) | (1U << W_P);
+        if ((NUM_ND(V(W_L)) && V(W_L)->fr) || (V(W_L)->ip != 2 && V(W_L)->ip != 20))
+            return -20;
+        if (V(W_P)->ip > 6 || (NUM_ND(V(W_P)) && V(W_P)->fr))
+            return -29;
+        if (!axes)
+            return -26;
+    }
+#endif
+    if (nm == NM_G92 && !axes && !HASW(W_E))
+        return -26;
+    /* arcs and curves: checked before anything changes */
+    w.g = g;
+    w.extrude = extrude;
+    w.measure = 0;
+    w.length = 0;
+    w.err = 0;
+    w.per_point = 0;
+    w.a0 = 0;
+    w.a1 = 1;
+    if (moving && (motion == 2 || motion == 3)) {
+        uint8_t a0 = PLANE_AXES[plane][0], a1 = PLANE_AXES[plane][1], lin = (uint8_t)(3 - a0 - a1);
+        int32_t off[2], x, y, cur[2], e[2];
+        uint32_t re;
+        if (!(axes & ((1U << a0) | (1U << a1))))
+            return -32;
+        if (NNIK_GC_PLANES && plane && tgt[lin] != g->mp[lin])
+            return -20;
+        x = tgt[a0] - g->mp[a0];
+        y = tgt[a1] - g->mp[a1];
+        if (HASW(W_R)) {
+            int32_t rr = u[W_R];
+            used |= 1U << W_R;
+            if (rr == 0)
+                return -33;
+            r = nnik_gc_r_centre(x, y, rr, motion == 3, off);
+            if (r)
+                return r;
+        } else {
+            uint8_t o0 = (uint8_t)(W_I + a0), o1 = (uint8_t)(W_I + a1);
+            if (!HASW(o0) && !HASW(o1))
+                return -35;
+            used |= (uint16_t)((1U << o0) | (1U << o1));
+            off[0] = HASW(o0) ? u[o0] : 0;
+            off[1] = HASW(o1) ? u[o1] : 0;
+            if (arc_abs) {
+                off[0] += woff(g, wcs, tlo, a0) - g->mp[a0];
+                off[1] += woff(g, wcs, tlo, a1) - g->mp[a1];
             }
-            g->off[0] = o[0];
-            g->off[1] = o[1];
-            g->pos[0] = tgt[0];
-            g->pos[1] = tgt[1];
         }
-        g->inch = inch;
-        g->relative = rel;
+        c[0] = g->mp[a0] + off[0];
+        c[1] = g->mp[a1] + off[1];
+        if (iabs32(c[0]) > POS_LIMIT || iabs32(c[1]) > POS_LIMIT)
+            return -33;
+        cur[0] = g->mp[a0] - c[0];
+        cur[1] = g->mp[a1] - c[1];
+        e[0] = tgt[a0] - c[0];
+        e[1] = tgt[a1] - c[1];
+        rad = nnik_isqrt64(nnik_sq2(cur[0], cur[1]));
+        if (rad == 0)
+            return -33;
+        re = nnik_isqrt64(nnik_sq2(e[0], e[1]));
+        if (re == 0 || (re > rad ? re - rad : rad - re) > 5 + rad / 1000)
+            return -33;
+        w.a0 = a0;
+        w.a1 = a1;
+        w.per_point = NNIK_GC_PLANES && plane != 0;
+        w.c[0] = c[0];
+        w.c[1] = c[1];
+#if NNIK_GC_G5
+    } else if (moving && motion == 5) {
+        if (plane)
+            return -20;
+        if (!HASW(W_P) || !HASW(W_Q))
+            return -28;
+        used |= (1U << W_I) | (1U << W_J) | (1U << W_P) | (1U << W_Q);
+        if (HASW(W_I) || HASW(W_J)) {
+            c1[0] = g->mp[0] + (HASW(W_I) ? u[W_I] : 0);
+            c1[1] = g->mp[1] + (HASW(W_J) ? u[W_J] : 0);
+        } else if (g->motion == 5 && g->bez_ok) {
+            c1[0] = 2 * g->mp[0] - g->bez[0];
+            c1[1] = 2 * g->mp[1] - g->bez[1];
+        } else {
+            return -28;
+        }
+        c2[0] = tgt[0] + nnik_gc_um(V(W_P), inch);
+        c2[1] = tgt[1] + u[W_Q];
+        if (iabs32(c1[0]) > POS_LIMIT || iabs32(c1[1]) > POS_LIMIT || iabs32(c2[0]) > POS_LIMIT ||
+            iabs32(c2[1]) > POS_LIMIT)
+            return -33;
+#endif
+    }
+    if (b.have & (uint16_t)~used & (uint16_t)((1U << W_COUNT) - 1))
+        return -36;
+
+    /* ---- commit: the modal state, then the action */
+    if (HASW(W_F) && !inverse)
         g->feed = feed;
-        tool_state(g, &w[W_S], spindle, tz);
-        if (nonmodal == 4) {
-            uint32_t t = dwell_ticks((uint32_t)v);
-            if (t)
-                rest(g, t, idle_tool(g));
-        } else if (nonmodal == 28) { /* via X Y (if given), then home: where the motors started */
-            g->tool = move_tool(g, 1);
-            line_to(g, tgt[0], tgt[1], NNIK_GC_MAX_FEED_UM_MIN);
-            for (i = 0; i < 2; i++)
-                if (w[i].have || !xy)
-                    tgt[i] = -g->off[i];
-            line_to(g, tgt[0], tgt[1], NNIK_GC_MAX_FEED_UM_MIN);
-        }
-    } else {
-        uint8_t axes = w[W_X].have || w[W_Y].have || w[W_I].have || w[W_J].have || w[W_R].have;
-        int32_t c2[2];
-        uint32_t r = 0;
-        if (axes && motion >= 2) {
-            int32_t a0, a1, e0, e1, off[2];
-            uint32_t re, tol;
-            if (w[W_R].have) {
-                int32_t rad = to_um(&w[W_R], inch);
-                if (w[W_I].have || w[W_J].have)
-                    return fail(g, M_RIJ, 0, 0);
-                if (rad == 0)
-                    return fail(g, M_R0, 0, 0);
-                err = r_centre(tgt[0] - g->pos[0], tgt[1] - g->pos[1], rad, motion == 3 ? 1 : -1, off);
-                if (err)
-                    return fail(g, err, 0, 0);
-            } else if (!w[W_I].have && !w[W_J].have) {
-                return fail(g, M_ARCIJ, 0, 0);
-            } else {
-                off[0] = w[W_I].have ? to_um(&w[W_I], inch) : 0;
-                off[1] = w[W_J].have ? to_um(&w[W_J], inch) : 0;
+    if (HASW(W_S) && !b.m300 && !(nm == NM_G4 && NNIK_GC_MARLIN && !HASW(W_P)))
+        g->s = u[W_S];
+    if (HASW(W_T))
+        g->tool_no = (uint8_t)V(W_T)->ip;
+    if (b.spindle != UNSET)
+        g->spindle = b.spindle == 5 ? 0 : b.spindle;
+    if (b.coolant != UNSET)
+        g->coolant = b.coolant == 9 ? 0 : (uint8_t)(g->coolant | (1U << (b.coolant - 7)));
+    if (b.m300)
+        g->pen = u[W_S] <= NNIK_GC_M300_DOWN;
+    g->plane = plane;
+    g->inch = inch;
+    g->relative = rel;
+    g->arc_abs = arc_abs;
+    g->inverse_time = inverse;
+    g->tlo = tlo;
+    g->wcs = wcs;
+    g->e_rel = e_rel;
+    if (b.motion != UNSET)
+        g->motion = b.motion;
+    blk0 = g->blocks;
+    r = 0;
+    if (nm == NM_G4) {
+        uint32_t ms = (uint32_t)dwell_ms;
+        uint32_t t = ms / 1000 * NNIK_GC_TICK_HZ + ms % 1000 * NNIK_GC_TICK_HZ / 1000;
+        if (t && !g->check)
+            rest(g, t, idle_tool(g));
+#if NNIK_GC_WCS
+    } else if (nm == NM_G10) {
+        uint8_t p = V(W_P)->ip ? (uint8_t)(V(W_P)->ip - 1) : g->wcs;
+        for (k = 0; k < 3; k++)
+            if (axes & (1U << k))
+                g->coord[p][k] = V(W_L)->ip == 2 ? u[W_X + k] : g->mp[k] - g->g92[k] - (k == 2 ? g->tlo : 0) - u[W_X + k];
+#endif
+    } else if (nm == NM_G92) {
+        for (k = 0; k < 3; k++)
+            if (axes & (1U << k))
+                g->g92[k] = g->mp[k] - g->coord[g->wcs][k] - (k == 2 ? g->tlo : 0) - u[W_X + k];
+    } else if (nm == NM_G92_1) {
+        g->g92[0] = g->g92[1] = g->g92[2] = 0;
+#if NNIK_GC_WCS
+    } else if (nm == NM_G28_1 || nm == NM_G30_1) {
+        for (k = 0; k < 3; k++)
+            g->home[nm == NM_G30_1][k] = g->mp[k];
+#endif
+    } else if (nm == NM_G28 || nm == NM_G30) {
+        const int32_t *stored = g->home[nm == NM_G30];
+        int32_t dest[3];
+        if (axes && !NNIK_GC_MARLIN)
+            r = line_to(g, tgt, NNIK_GC_MAX_FEED_UM_MIN, 1, 0);
+        for (k = 0; k < 3; k++)
+            dest[k] = (axes & (1U << k)) || !axes ? stored[k] : g->mp[k];
+        if (!r)
+            r = line_to(g, dest, NNIK_GC_MAX_FEED_UM_MIN, 1, 0);
+    }
+    if (!r && moving) {
+        if (motion <= 1) {
+            int32_t f = motion == 0 ? (int32_t)NNIK_GC_MAX_FEED_UM_MIN : g->feed;
+#if NNIK_GC_G93
+            if (inv_f && motion)
+                f = inverse_feed(nnik_isqrt64(nnik_sq2(tgt[0] - g->mp[0], tgt[1] - g->mp[1])), inv_f);
+#endif
+            r = line_to(g, tgt, f, motion == 0, extrude);
+        } else {
+            w.feed = g->feed;
+#if NNIK_GC_G93
+            if (inv_f) { /* G93: the chords' length first */
+                w.measure = 1;
+                w.last[0] = g->mp[0];
+                w.last[1] = g->mp[1];
+                curve(g, motion, c, c1, c2, tgt, rad, &w);
+                w.measure = 0;
+                w.feed = inverse_feed(w.length, inv_f);
             }
-            c2[0] = g->pos[0] + off[0];
-            c2[1] = g->pos[1] + off[1];
-            if (c2[0] > POS_LIMIT || c2[0] < -POS_LIMIT || c2[1] > POS_LIMIT || c2[1] < -POS_LIMIT)
-                return fail(g, M_RANGE, 0, 0);
-            a0 = g->pos[0] - c2[0];
-            a1 = g->pos[1] - c2[1];
-            e0 = tgt[0] - c2[0];
-            e1 = tgt[1] - c2[1];
-            r = nnik_isqrt64((uint64_t)((int64_t)a0 * a0) + (uint64_t)((int64_t)a1 * a1));
-            if (r == 0)
-                return fail(g, M_R0, 0, 0);
-            re = nnik_isqrt64((uint64_t)((int64_t)e0 * e0) + (uint64_t)((int64_t)e1 * e1));
-            tol = 5 + r / 1000;
-            if (re == 0 || (re > r ? re - r : r - re) > tol)
-                return fail(g, M_OFF, 0, 0);
-        }
-        /* commit the modal state, then move */
-        g->inch = inch;
-        g->relative = rel;
-        g->motion = motion;
-        g->feed = feed;
-        tool_state(g, &w[W_S], spindle, tz);
-        if (axes) {
-            g->tool = move_tool(g, motion == 0);
-            int32_t f = motion == 0 ? (int32_t)NNIK_GC_MAX_FEED_UM_MIN : feed;
-            if (motion >= 2)
-                arc_to(g, c2, tgt, r, motion == 3 ? 1 : -1, f);
-            else
-                line_to(g, tgt[0], tgt[1], f);
+#endif
+            if (!w.per_point) {
+                g->mp[2] = tgt[2];
+                g->tool = move_tool(g, 0, extrude);
+            }
+            curve(g, motion, c, c1, c2, tgt, rad, &w);
+            g->mp[2] = tgt[2];
+            r = w.err;
         }
     }
-    if (wait & 2) { /* M2/M30 end the program as grbl: G1, G90 */
+    if (r)
+        return r;
+    if (motion == 5 && moving) {
+        g->bez[0] = c2[0];
+        g->bez[1] = c2[1];
+        g->bez_ok = 1;
+    } else if (moving) {
+        g->bez_ok = 0;
+    }
+    g->e = e_tgt;
+    if (b.stop == 2 || b.stop == 30) { /* program end as grbl: G1 G17 G90 G94 G54, M5 M9 */
         g->motion = 1;
+        g->plane = 0;
         g->relative = 0;
+        g->inverse_time = 0;
+        g->wcs = 0;
         g->spindle = 0;
+        g->coolant = 0;
     }
-    /* a tool word that turns a laser off (M5, S0, M2/M30) or moves the pen, and no segment on
-     * this line: the tool changes on the next tick, by a one-tick segment without steps, if the
-     * last segment left it otherwise (a new power alone waits for the next cut) */
-    if ((spindle != 0xff || w[W_S].have || w[W_Z].have || (wait & 2)) && g->blocks == blk0 &&
-        g->last_tool != idle_tool(g) && (NNIK_GC_TOOL == 1 || move_tool(g, 0) == 0))
+    seg_blocks = g->blocks != blk0;
+    if ((b.spindle != UNSET || HASW(W_S) || (axes & 4) || b.stop == 2 || b.stop == 30 || b.m300) && !seg_blocks &&
+        g->last_tool != idle_tool(g) && (NNIK_GC_TOOL == 1 || move_tool(g, 0, 0) == 0) && !g->check)
         rest(g, 1, idle_tool(g));
-    if (wait & 1) /* M400, M2, M30: the planner runs out to rest */
-        nnik_gc_flush(g);
-    return (int8_t)(wait & 1);
+    if (b.wait || b.stop == 0 || b.stop == 2 || b.stop == 30) {
+        if (!g->check)
+            nnik_gc_flush(g);
+        return b.stop == 0 ? NNIK_GC_PAUSE : NNIK_GC_SYNC;
+    }
+    return NNIK_GC_OK;
 }

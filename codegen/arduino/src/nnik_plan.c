@@ -3,6 +3,7 @@
  * paths below give the same values as the wide ones (cheaper on AVR), nothing else.
  */
 #include "nnik_plan.h"
+#include "nnik_imath.h"
 
 #if NNIK_PL_N < 2 || NNIK_PL_N > 64
 #error "NNIK_PL_N must be 2..64"
@@ -228,7 +229,7 @@ void nnik_pl_sample(nnik_plan_t *pl, nnik_pl_sample_t *out)
                 break;
             }
             b = &pl->q[pl->head];
-            if (b->len >= 128 || o < (b->len << 16)) {
+            if (b->len >= 256 || o < (b->len << 16)) { /* o < 2^24: a block of 256 um or more holds it */
                 uint32_t r = (b->len << 16) - o; /* the low 32 bits: r_fr, and r_um by parts */
                 pl->r_fr = (uint16_t)r;
                 pl->r_um = b->len - (o >> 16) - ((uint16_t)o != 0);

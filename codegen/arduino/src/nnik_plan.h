@@ -101,9 +101,6 @@ uint8_t nnik_pl_ready(const nnik_plan_t *pl, uint8_t flushing);
 /* One sample (only when nnik_pl_ready); pops the blocks it leaves behind. */
 void nnik_pl_sample(nnik_plan_t *pl, nnik_pl_sample_t *out);
 
-/* floor(sqrt(v)), as in nnik_gcode.c */
-uint32_t nnik_isqrt64(uint64_t v);
-
 #ifdef __cplusplus
 }
 #endif

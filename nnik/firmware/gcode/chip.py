@@ -60,7 +60,7 @@ def mcu_of(name: str) -> Mcu:
 def common_flags(mcu: str = MCU) -> list[str]:
     m = mcu_of(mcu)
     return [f"-mmcu={m.name}", f"-DF_CPU={CLOCK_HZ}L", "-DARDUINO=10807", f"-D{m.board}", "-DARDUINO_ARCH_AVR",
-            "-Os", "-g0", "-ffunction-sections", "-fdata-sections", "-Wall"]
+            "-Os", "-g0", "-ffunction-sections", "-fdata-sections", "-mcall-prologues", "-Wall"]
 
 
 COMMON = common_flags(MCU)
@@ -187,6 +187,25 @@ def build_harness(workdir: Path) -> Path:
         tmp = exe.with_suffix(".tmp")
         run([find_tool("gcc"), "-O2", "-Wall", "-Wextra", "-Werror", HARNESS_SRC, "-o", tmp, "-lsimavr"],
             "build the simavr harness", cwd=workdir)
+        tmp.rename(exe)
+    return exe
+
+
+PTY_HARNESS_SRC = HARNESS_DIR / "arduino" / "nnik_simavr_pty.c"
+
+
+def build_pty_harness(workdir: Path) -> Path:
+    """The simavr runner that puts the chip's UART on a pseudo-terminal (for real senders;
+    nnik.firmware.gcode.pty_chip runs it), compiled against libsimavr (cached by source hash)."""
+    _require()
+    (workdir,) = _absolute(workdir)
+    digest = hashlib.sha256(PTY_HARNESS_SRC.read_bytes()).hexdigest()[:12]
+    exe = workdir / f"nnik_simavr_pty-{digest}"
+    if not exe.is_file():
+        workdir.mkdir(parents=True, exist_ok=True)
+        tmp = exe.with_suffix(".tmp")
+        run([find_tool("gcc"), "-O2", "-Wall", "-Wextra", "-Werror", PTY_HARNESS_SRC, "-o", tmp, "-lsimavr", "-lutil"],
+            "build the simavr pty harness", cwd=workdir)
         tmp.rename(exe)
     return exe
 

@@ -12,11 +12,11 @@ from pathlib import Path
 import numpy as np
 
 from nnik.errors import NnikError
+from nnik.firmware.arduino import ENGINE_C
 from nnik.targets.toolchain import HARNESS_DIR
 from nnik.targets.host import HOST_FLAGS
 
 DRIVER = HARNESS_DIR / "arduino" / "nnik_gcode_host.c"
-ENGINE_C = ("nnik_gcode.c", "nnik_plan.c", "nnik_shaper.c")
 
 
 _BUILT: dict[str, Path] = {}
@@ -50,7 +50,7 @@ def run_engine_host(libdir: Path, name: str, lines: list[str], cc: str = "gcc", 
     "overspeed": n} for the lines (the job's end flushes the planner); defines: the config's
     macros (MachineConfig.defines())."""
     exe = build_engine_host(libdir, name, cc, defines)
-    data = "".join(f"{ln}\n" for ln in lines).encode("latin-1")
+    data = b"".join((ln.encode("utf-8") if isinstance(ln, str) else ln) + b"\n" for ln in lines)
     run = subprocess.run([str(exe)], input=data, capture_output=True, env=dict(os.environ, ASAN_OPTIONS="detect_leaks=0"))
     if run.returncode != 0:
         raise NnikError(f"host run of the G-code engine failed: {run.stderr.decode(errors='replace')[:300]}")

@@ -16,46 +16,22 @@ from pathlib import Path
 
 import numpy as np
 
+from nnik.files.atomic_write import write_file_atomic
 from nnik.files.outdir import JOB_DIR
 from nnik.progress import bar
 from nnik.errors import NnikError
 from nnik.firmware.gcode.contour import contour_report
 from nnik.firmware.config import MachineConfig
-from nnik.firmware.gcode.motion import interpret, plan_steps
+from nnik.firmware.gcode.interpreter import Interpreter
+from nnik.firmware.gcode.job_input import JobOptions, prepare, read_job
+from nnik.firmware.gcode.motion import plan_steps
+from nnik.firmware.gcode.reader import sendable
 from nnik.firmware.ik_oracle import ik_oracle, load_scenario_of
-from nnik.firmware.gcode.parse import split_lines
 from nnik.firmware.gcode.plot import job_png
 from nnik.firmware.gcode.steps import chip_events, chip_tool_events, model_events, model_tool_events
 
 CLOCK_HZ = 16_000_000
 SHAPER_CHOICES = ("none", "zv", "mzv", "zvd", "ei", "auto")
-
-
-MACHINE_TAG = "; nnik-machine:"
-MACHINE_KEYS = {"tool": str, "s_max": int, "pen_z_um": int, "servo_up_deg": int, "servo_down_deg": int}
-
-
-def job_machine(lines: list[str], cfg: MachineConfig, source: str) -> MachineConfig:
-    """The tool a job is written for, from its comment lines '; nnik-machine: tool=servo
-    pen_z_um=500' (the firmware reads them as comments); without one, cfg as it is."""
-    from dataclasses import replace
-
-    kw = {}
-    for ln in lines:
-        if not ln.startswith(MACHINE_TAG):
-            continue
-        for item in ln[len(MACHINE_TAG):].split():
-            key, _, val = item.partition("=")
-            if key not in MACHINE_KEYS:
-                raise NnikError(f"unknown machine setting {key!r}; known: {', '.join(MACHINE_KEYS)}", source)
-            try:
-                kw[key] = MACHINE_KEYS[key](val)
-            except ValueError:
-                raise NnikError(f"machine setting {key} needs a {MACHINE_KEYS[key].__name__}", source) from None
-    try:
-        return replace(cfg, **kw)
-    except ValueError as exc:
-        raise NnikError(str(exc), source) from None
 
 
 def tool_report(seg, cfg: MachineConfig) -> dict:
@@ -67,21 +43,15 @@ def tool_report(seg, cfg: MachineConfig) -> dict:
             "changes": int(len(model_tool_events(seg)))}
 
 
-def read_job(path: Path) -> list[str]:
-    path = Path(path)
-    if not path.is_file():
-        raise NnikError("G-code file not found", str(path))
-    return split_lines(path.read_bytes())
-
-
-def python_model(outdir: Path, lines: list[str], cfg: MachineConfig, source: str):
-    """(plan, segments, events) of the firmware's logic; the first bad line -> NnikError."""
-    plan = interpret(lines, cfg)
-    for reply in plan.replies:
-        if reply != "ok":
-            raise NnikError(reply.removeprefix("error: "), source)
-    seg = plan_steps(plan, cfg, ik_oracle(outdir))
-    return plan, seg, model_events(seg)
+def python_model(outdir: Path, lines: list, cfg: MachineConfig, source: str, line_of: list[int] | None = None):
+    """(plan, segments, events) of the firmware's logic; the first refused line -> NnikError
+    FILE:LINE (line_of: the file's line number of each line)."""
+    it = Interpreter(cfg)
+    for k, raw in enumerate(lines):
+        if it.line(raw) not in ("ok", "$"):
+            raise NnikError(f"{source}:{line_of[k] if line_of else k + 1}: {it.last_error}")
+    seg = plan_steps(it.plan, cfg, ik_oracle(outdir))
+    return it.plan, seg, model_events(seg)
 
 
 def chip_build(outdir: Path, cfg: MachineConfig, workdir: Path, mcu: str = "atmega328p") -> dict:
@@ -108,7 +78,6 @@ def chip_build(outdir: Path, cfg: MachineConfig, workdir: Path, mcu: str = "atme
 def chip_job(built: dict, lines: list[str], cfg: MachineConfig, seconds: float, progress=None) -> dict:
     """The job on the built firmware (chip_build) on simavr: replies, events, times."""
     from nnik.firmware.gcode import chip
-    from nnik.firmware.gcode.simrun import is_answer
     from nnik.targets.toolchain import TargetError
 
     fw = built["fw"]
@@ -116,18 +85,12 @@ def chip_job(built: dict, lines: list[str], cfg: MachineConfig, seconds: float, 
         run = chip.run_firmware(fw, lines, built["workdir"] / "build", 2.0 + 1.5 * seconds, progress=progress)
     except TargetError as exc:
         raise NnikError(f"avr: {exc}") from None
-    texts = [t for _, t in run.replies]
-    start = next((i + 1 for i, t in enumerate(texts) if t), len(texts))  # after the banner (its first text)
-    said = [t for t in texts[start:] if t]  # answers, and any message lines
-    out = {"selftest": built["selftest"], "selftest_pass": built["selftest"].startswith("PASS"),
-           "flash_bytes": fw.flash_bytes, "ram_bytes": fw.ram_bytes, "state": run.state,
-           "replies": [t for t in said if is_answer(t)], "run": run,
-           "events": chip_events(run.steps, run.marks, CLOCK_HZ // cfg.tick_hz),
-           "tool_events": chip_tool_events(run.tool, run.marks, CLOCK_HZ // cfg.tick_hz),
-           "segments_started": int(len(run.marks)), "end_cycle": run.end_cycle, **motion_times(run)}
-    if any(not is_answer(t) for t in said):
-        out["messages"] = [t for t in said if not is_answer(t)]
-    return out
+    return {"selftest": built["selftest"], "selftest_pass": built["selftest"].startswith("PASS"),
+            "flash_bytes": fw.flash_bytes, "ram_bytes": fw.ram_bytes, "state": run.state,
+            "replies": [t for _, t in run.replies if not t.startswith(("nnik ", "Grbl "))], "run": run,
+            "events": chip_events(run.steps, run.marks, CLOCK_HZ // cfg.tick_hz),
+            "tool_events": chip_tool_events(run.tool, run.marks, CLOCK_HZ // cfg.tick_hz),
+            "segments_started": int(len(run.marks)), "end_cycle": run.end_cycle, **motion_times(run)}
 
 
 def chip_run(outdir: Path, lines: list[str], cfg: MachineConfig, seconds: float, workdir: Path,
@@ -208,13 +171,16 @@ def machine_for(scn, shaper: str | None, seg_um: int | None) -> MachineConfig:
 
 
 def run_job(outdir: Path, job_path: Path, seg_um: int | None = None, use_chip: bool | None = None,
-            shaper: str | None = None, precompensate: bool = False, mcu: str = "atmega328p") -> dict:
+            shaper: str | None = None, precompensate: bool = False, opts: JobOptions | None = None,
+            check: bool = False, mcu: str = "atmega328p") -> dict:
     """Run a job; use_chip None: on the simulated chip when the toolchain is there (mcu: the Uno's
     atmega328p or the Mega's atmega2560; the sketches are built while the Python model runs, and
     the job runs on simavr while the plot is drawn); shaper:
     none|zv|mzv|zvd|ei|auto overrides the scenario's [motion] shaper; precompensate: run the
-    job rewritten offline for the belts (nnik.firmware.gcode.compensation).  With a [dynamics]
-    table every method is compared on the tip and the chosen one goes to the chip."""
+    job rewritten offline for the belts (nnik.firmware.gcode.compensation); opts: flavour, tool,
+    tool rule and the job's frame (--fit, --scale, --offset); check: parse and plan only (grbl's
+    $C), no IK, no chip, nothing written.  With a [dynamics] table every method is compared on
+    the tip and the chosen one goes to the chip."""
     from nnik.firmware.gcode import chip
 
     outdir, job_path = Path(outdir), Path(job_path)
@@ -227,8 +193,12 @@ def run_job(outdir: Path, job_path: Path, seg_um: int | None = None, use_chip: b
         raise NnikError(f"{'precompensation' if precompensate else 'shaper ' + repr(asked)} needs a [dynamics] table "
                         f"(f_hz, zeta) in {scn.source}", None, where)
     cfg = machine_for(scn, "none" if asked in ("auto", "precompensated") else asked, seg_um)
-    lines = read_job(job_path)
-    cfg = job_machine(lines, cfg, str(job_path))
+    prep = prepare(read_job(job_path), cfg, opts or JobOptions(), str(job_path))
+    cfg, lines = prep.cfg, [sendable(ln).decode("latin-1") for ln in prep.lines]
+    if check:
+        from nnik.firmware.gcode.check import check_report
+
+        return {"scenario": scn.name, "job": job_path.name, **prep.summary, **check_report(lines, cfg)}
     # a long job shows its stage on a terminal (nothing in a log: nnik.progress)
     stages = bar(total=4, desc=f"job {job_path.name}", unit="stage", leave=False)
     dyn_fig = None
@@ -253,14 +223,18 @@ def run_job(outdir: Path, job_path: Path, seg_um: int | None = None, use_chip: b
         work = outdir / JOB_DIR / "work" / job_path.stem
         built = pool.submit(chip_build, outdir, cfg, work, mcu) if use else None
         stages.set_postfix_str("Python model of the firmware")
-        plan, seg, events = python_model(outdir, lines, cfg, str(job_path))
+        plan, seg, events = python_model(outdir, lines, cfg, str(job_path),
+                                         prep.line_of if not precompensate else None)
         stages.update(1)
-        res = {"scenario": scn.name, "job": job_path.name, "unit": scn.unit,
+        res = {"scenario": scn.name, "job": job_path.name, "unit": scn.unit, "gcode": prep.summary,
                "machine": {"origin_um": list(cfg.origin_um), "seg_um": cfg.seg_um, "tick_hz": cfg.tick_hz,
                            "sample_hz": cfg.sample_hz, "shaper": cfg.shaper,
                            "tool": cfg.tool, "tool_defines": cfg.defines()},
                "tool": tool_report(seg, cfg), "motion": motion_report(seg, cfg),
                **contour_report(scn, cfg, plan, seg, events)}
+        if res["clamped"]:
+            raise NnikError(f"{res['clamped']} samples outside the IK's domain although the job fits the workspace: "
+                            "a bug, please report it", str(job_path))
         plot = res.pop("plot")
         if dyn_fig is not None:
             chosen = dyn_fig["methods"][dyn_fig["chosen"]]
@@ -293,7 +267,7 @@ def run_job(outdir: Path, job_path: Path, seg_um: int | None = None, use_chip: b
         if pool is not None:
             pool.shutdown(wait=True, cancel_futures=True)
     res["png"] = res.pop("png")  # the key order of the JSON before the chip ran beside the plot
-    (out / f"{job_path.stem}.json").write_text(json.dumps(res, indent=2) + "\n")
+    write_file_atomic(out / f"{job_path.stem}.json", json.dumps(res, indent=2) + "\n")
     stages.close()
     return res
 

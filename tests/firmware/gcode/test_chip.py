@@ -19,7 +19,7 @@ from nnik.machine.data import exact_targets
 from nnik.firmware.gcode import chip
 from nnik.firmware.gcode.job import CLOCK_HZ, run_job
 from nnik.firmware.gcode.motion import interpret, plan_steps
-from nnik.firmware.gcode.parse import split_lines
+from nnik.firmware.gcode.reader import split_lines
 from nnik.firmware.gcode.steps import chip_events, model_events
 from tests.firmware.gcode.conftest import require_chip
 
@@ -56,7 +56,7 @@ def faster(lines: list[str], k: int = 4) -> list[str]:
 @pytest.mark.parametrize("job", ["l_path", "circle", "star"])
 def test_every_step_of_every_job_matches(firmware, scenario, job):
     run, lib, fw, ik, work = firmware[scenario]
-    lines = faster(split_lines((JOBS / f"{job}.gcode").read_bytes()))
+    lines = faster([ln.decode('latin-1') for ln in split_lines((JOBS / f"{job}.gcode").read_bytes())])
     cfg = lib["machine"]
     plan = interpret(lines, cfg)
     seg = plan_steps(plan, cfg, ik)
@@ -68,7 +68,7 @@ def test_every_step_of_every_job_matches(firmware, scenario, job):
     got = chip_events(res.steps, res.marks, CLOCK_HZ // cfg.tick_hz)
     assert len(want) >= exact_min_events(run, plan, cfg) > 0 and got.shape == want.shape
     assert np.array_equal(got, want)
-    assert fw.flash_bytes <= chip.FLASH_BYTES and fw.ram_bytes <= chip.RAM_BYTES - 512  # stack room
+    assert fw.flash_bytes <= chip.FLASH_BYTES and fw.ram_bytes <= chip.RAM_BYTES - 256  # the stack keeps 256 B (the brief)
 
 
 @pytest.mark.parametrize("scenario", ["galvo_cba2012", "corexy_nonlinear"])
@@ -80,9 +80,9 @@ def test_every_step_matches_with_zvd_shaping(zvd_firmware, scenario, job):
     entry = zvd_firmware[scenario]
     cfg = entry[1]["machine"]
     assert cfg.shaper == "zvd" and cfg.shaper_ram_bytes <= 256
-    plan, seg, res = run_both(entry, faster(split_lines((JOBS / f"{job}.gcode").read_bytes())))
+    plan, seg, res = run_both(entry, faster([ln.decode('latin-1') for ln in split_lines((JOBS / f"{job}.gcode").read_bytes())]))
     assert np.abs(seg.ends_um - seg.planned_um).max() > 0  # the shaper moved the samples
-    assert entry[2].ram_bytes <= chip.RAM_BYTES - 512
+    assert entry[2].ram_bytes <= chip.RAM_BYTES - 256
 
 
 def test_shipped_job_end_to_end_with_selftest_rate_and_plot(firmware):
@@ -111,13 +111,14 @@ def test_shipped_job_end_to_end_with_selftest_rate_and_plot(firmware):
 
 def test_bad_lines_get_the_same_error_on_the_chip(firmware):
     run, lib, fw, _, work = firmware["corexy_nonlinear"]
-    lines = ["G1 X1 F3000", "G1 Z2", "G2 X5 Y5 I1", "G1 X" + "1" * 100, "G7", "G1 X1.1234567", "G1 Y1", "M400"]
+    lines = ["G1 X1 F3000", "G1 A2", "G2 X5 Y5 I1", "G1 X" + "1" * 100, "G7", "G1 X1.1234567", "G1 Y1", "#1=2",
+             "G38.2 Z-1", "M104 S200", "G1 X1 *1", "M400"]
     res = chip.run_firmware(fw, lines, work, 5.0)
-    got = [t for _, t in res.replies if not t.startswith("nnik ")]
+    got = [t for _, t in res.replies if not t.startswith(("nnik ", "Grbl ", "["))]
     want = interpret(lines, lib["machine"]).replies
     assert got == want
-    assert want[1] == "error: line 2: unsupported word Z" and want[3] == "error: line 4: line too long"
-    assert sum(r.startswith("error:") for r in want) == 5
+    assert want == ["ok", "error:20", "error:33", "error:11", "error:20", "ok", "ok", "error:41", "error:43", "ok",
+                    "error:40", "ok"]
 
 
 def test_arduino_mk_builds_the_selftest_that_passes(firmware, tmp_path):

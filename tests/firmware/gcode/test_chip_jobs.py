@@ -36,9 +36,9 @@ def test_bad_r_arcs_get_the_same_error_on_the_chip(firmware):
     lines = ["G1 X1 F3000", "G2 X10 R2", "G2 X1 Y2 I1 R1", "G1 X2 R1", "G3 X1 R0", "G2 R3", "G3 X3 R-1",
              "G2 X2 Y1 R-1"]
     plan, _, _ = run_both(firmware["corexy_nonlinear"], lines)
-    assert plan.replies[1:6] == ["error: line 2: arc chord longer than 2|R|", "error: line 3: arc with both R and I/J",
-                                 "error: line 4: R needs G2 or G3", "error: line 5: arc radius is zero",
-                                 "error: line 6: R arc ends at its start"]
+    # grbl's numbers: invalid target (chord > 2|R|), unused words (I beside R; R on G1), invalid target
+    # (R0), an arc without its end (32)
+    assert plan.replies[1:6] == ["error:33", "error:36", "error:36", "error:33", "error:32"]
     assert plan.replies[6:] == ["ok", "ok"]
 
 
@@ -52,7 +52,7 @@ GRBL = ["N1 G17 G21 G90 G40 G49 G80 G94*24", "N2 G92 X0 Y0", "N3 g0 x5 y5", "N4 
 @pytest.mark.parametrize("scenario", MACHINES)
 def test_grbl_words_on_the_chip(firmware, scenario):
     plan, seg, res = run_both(firmware[scenario], GRBL)
-    assert plan.replies == ["ok"] * 10 + ["error: line 11: unsupported G18", "ok"]
+    assert plan.replies == ["ok"] * 12  # G18: a plane (the Uno build carries planes)
     dwell = [t for t in plan.dwell if t]
     assert dwell == [500, 120]  # ticks at 10 kHz (P in whole ms), each a segment on the chip too
     assert plan.ends[-1] == (0, 0)  # G28: back where the motors started, after two G92s

@@ -18,7 +18,7 @@ from nnik.firmware.arduino import export_arduino
 from nnik.firmware.gcode import chip
 from nnik.firmware.gcode.job import CLOCK_HZ
 from nnik.firmware.gcode.motion import interpret, plan_steps
-from nnik.firmware.gcode.parse import split_lines
+from nnik.firmware.gcode.reader import split_lines
 from nnik.firmware.gcode.steps import chip_events, model_events
 from nnik.firmware.ik_oracle import ik_oracle, ik_sources, picked_implementation
 from tests.firmware.gcode.test_chip import JOBS, faster, toolchain  # noqa: F401 (autouse: skip without the toolchain)
@@ -33,7 +33,7 @@ def test_lut_pick_steps_like_the_python_model(galvo_run, tmp_path):
 
     lib = export_arduino(run, tmp_path / "lib")
     fw = chip.build_sketch(tmp_path / "lib", f"{lib['name']}_gcode", tmp_path / "build")
-    lines = faster(split_lines((JOBS / "l_path.gcode").read_bytes()), 2)
+    lines = faster([ln.decode('latin-1') for ln in split_lines((JOBS / "l_path.gcode").read_bytes())], 2)
     cfg = lib["machine"]
     plan = interpret(lines, cfg)
     seg = plan_steps(plan, cfg, ik_oracle(run))

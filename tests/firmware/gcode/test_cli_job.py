@@ -15,10 +15,10 @@ JOBS = Path(__file__).resolve().parents[3] / "datasets" / "jobs"
 
 def test_bad_gcode_is_one_line_naming_it_and_exit_2(picked_run, tmp_path, capsys):
     bad = tmp_path / "bad.gcode"
-    bad.write_text("G21\nG1 X1 Z2\n")
+    bad.write_text("G21\nG1 X1 A2\n")
     assert main(["job", str(picked_run), str(bad), "--no-chip"]) == 2
     err = capsys.readouterr().err.strip()
-    assert err == f"nnik: error: {bad}: line 2: unsupported word Z"
+    assert err == f"nnik: error: {bad}:2: error:20 unsupported command: axis A: the machine has X and Y"
     assert main(["job", str(picked_run), str(tmp_path / "missing.gcode"), "--no-chip"]) == 2
     assert main(["job", str(picked_run), str(JOBS / "l_path.gcode"), "--seg-um", "50", "--no-chip"]) == 2
     capsys.readouterr()
@@ -79,13 +79,19 @@ def test_job_with_a_tool_reports_it_and_checks_its_changes_on_the_chip(picked_ru
     assert "tool on / travel" in out and f"{c['tool_changes']} equal" in out
 
 
-def test_job_names_its_tool_in_a_comment(picked_run, tmp_path, capsys):
+def test_the_tool_is_the_machines_not_the_files(picked_run, tmp_path, capsys):
+    """A comment does not change the machine (Z is a laser's focus); --tool and --tool-z do."""
     job = tmp_path / "pen.gcode"
-    job.write_text("; nnik-machine: tool=pen pen_z_um=500\nG0 Z1\nG0 X1\nG1 Z0\nG1 X2\nG0 Z1\n")
+    job.write_text("; nnik-machine: tool=pen pen_z_um=500\nG0 Z1\nG0 X1\nG1 Z0.4 F600\nG1 X2\nG0 Z1\n")
     assert main(["job", str(picked_run), str(job), "--no-chip"]) == 0
     res = json.loads((picked_run / "job" / "pen.json").read_text())
+    assert res["machine"]["tool"] == "laser" and res["tool"]["on_mm"] == 0.0
+    assert res["gcode"]["z_range_mm"] == [0.4, 1.0] and res["gcode"]["tool_rule"] == "s"
+    assert main(["job", str(picked_run), str(job), "--no-chip", "--tool", "pen", "--tool-z", "0.5"]) == 0
+    res = json.loads((picked_run / "job" / "pen.json").read_text())
     assert res["machine"]["tool"] == "pen" and res["tool"]["on_mm"] == 1.0 and res["tool"]["travel_mm"] == 1.0
-    bad = tmp_path / "bad.gcode"
-    bad.write_text("; nnik-machine: tool=plasma\nG0 X1\n")
-    assert main(["job", str(picked_run), str(bad), "--no-chip"]) == 2
-    assert capsys.readouterr().err.strip() == f"nnik: error: {bad}: tool must be one of laser, pen, servo"
+    assert res["gcode"]["tool_rule"] == "z" and res["gcode"]["moves_tool_on"] == 1
+    capsys.readouterr()
+    assert main(["job", str(picked_run), str(job), "--no-chip", "--tool", "plasma"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("nnik: error: ") and "--tool" in err and "laser, pen, servo, spindle, knife, none" in err

@@ -11,7 +11,11 @@ from hypothesis import strategies as st
 
 from nnik.firmware.config import default_machine
 from nnik.firmware.gcode.compensation import auto_pick, compare, job_dynamics, model_run
-from nnik.firmware.gcode.job import read_job
+from nnik.firmware.gcode.job_input import read_job as read_bytes
+
+
+def read_job(path):
+    return [ln.decode() for ln in read_bytes(path)]
 from nnik.firmware.ik_oracle import ik_oracle, load_scenario_of
 
 JOBS = Path(__file__).resolve().parents[3] / "datasets" / "jobs"

@@ -82,10 +82,10 @@ def jobs(draw, pen: bool = False) -> list[str]:
 
     add(f"G21 G90 F{draw(st.integers(2000, 9000))}")
     for _ in range(draw(st.integers(1, 5))):
-        inch, rel, (x0, y0) = it.inch, it.relative, it.pos
+        inch, rel, (x0, y0) = it.inch, it.relative, tuple(it.mp[:2])
         if draw(st.integers(0, 2)) == 0:
             grbl_word()
-            inch, rel, (x0, y0) = it.inch, it.relative, it.pos
+            inch, rel, (x0, y0) = it.inch, it.relative, tuple(it.mp[:2])
         kind = draw(st.sampled_from(["line", "line", "rapid", "ij", "ij", "circle", "r", "r", "modes", "bad"]))
         modes = ""
         if kind == "modes" or draw(st.integers(0, 4)) == 0:

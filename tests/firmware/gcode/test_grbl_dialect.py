@@ -41,8 +41,8 @@ def test_g28_rapids_to_where_the_motors_started_named_axes_only():
 
 
 def test_g4_dwells_on_the_tick_as_a_segment_without_steps():
-    plan = interpret(["G1 X1 F600", "G4 P0.5", "G4 P0", "G4 P0.0004", "g4 p0.0005", "G4 P2 X1", "G4 P-1", "G1 X0"], CFG)
-    assert plan.replies[5:7] == ["error: line 6: G4 needs P >= 0", "error: line 7: G4 needs P >= 0"]
+    plan = interpret(["G1 X1 F600", "G4 P0.5", "G4 P0", "G4 P0.0004", "g4 p0.0005", "G4", "G4 P-1", "G1 X0"], CFG)
+    assert plan.replies[5:7] == ["error:28", "error:4"]  # no P: value word missing; P < 0: negative value
     seg = steps_of(plan)
     assert plan.dwell == [5000, 10]  # P0 and P0.0004 (0 ms) queue nothing; 0.5 ms rounds to 1 ms
     dw = np.flatnonzero(seg.kind == 1)
@@ -91,5 +91,5 @@ def test_tool_words_at_rest_and_the_pen():
     assert plan.replies == ["ok"] * 7
     assert plan.tool == [8, 37]  # the blocks: X1 down, Y1 up
     assert [op[2] for op in plan.ops if op[0] == "rest"] == [37, 37, 37]  # at rest: up, Z0.6 up, the dwell
-    laser = interpret(["G1 Z1"], MachineConfig(origin_um=(0, 0)))
-    assert laser.replies == ["error: line 1: unsupported word Z"]
+    laser = interpret(["G1 Z1 F100 M3 S1000", "G1 X1", "G1 X2 Z-1"], MachineConfig(origin_um=(0, 0)))
+    assert laser.replies == ["ok"] * 3 and laser.tool == [255, 255]  # Z is a laser's focus, not its switch

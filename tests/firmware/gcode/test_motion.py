@@ -11,7 +11,8 @@ from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
 from nnik.firmware.config import MachineConfig
-from nnik.firmware.gcode.motion import Interpreter, interpret, plan_steps, r_centre
+from nnik.firmware.gcode.geometry import r_centre
+from nnik.firmware.gcode.motion import Interpreter, interpret, plan_steps
 
 CFG = MachineConfig(origin_um=(0, 0), seg_um=500)
 
@@ -51,32 +52,36 @@ def test_inch_and_incremental_modes_stay_modal():
     assert plan.feed[0] == 254000  # 10 in/min
 
 
-@pytest.mark.parametrize("line, msg", [
-    ("G1 X1 I2", "I/J need G2 or G3"),
-    ("G2 X1 Y1", "arc needs I, J or R"),
-    ("G2 X12 R4.9", "arc chord longer than 2|R|"),
-    ("G3 X1 Y1 R-1", "R arc ends at its start"),
-    ("G2 X2 I1 R1", "arc with both R and I/J"),
-    ("G1 X2 R1", "R needs G2 or G3"),
-    ("G2 X2 R0", "arc radius is zero"),
-    ("G2 X10 I1", "arc end is off the circle"),
-    ("G2 I0 J0", "arc radius is zero"),
-    ("G1 X1 F0.5", "feed below 1 mm/min"),
+@pytest.mark.parametrize("line, code, detail", [
+    ("G1 X1 I2", 36, "I"),  # grbl: unused words
+    ("G2 X1 Y1", 35, ""),  # no in-plane offset
+    ("G2 Z1 I1", 32, ""),  # no in-plane axis word
+    ("G2 X12 R4.9", 33, "longer than 2|R|"),
+    ("G3 X1 Y1 R-1", 33, "ends at its start"),
+    ("G2 X2 I1 R1", 36, "I"),  # R wins, I is unused
+    ("G1 X2 R1", 36, "R"),
+    ("G2 X2 R0", 33, "R0"),
+    ("G2 X10 I1", 33, "off the circle"),
+    ("G2 X1 I0 J0", 33, "radius zero"),
+    ("G1 X1 F0.5", 22, "below 1 mm/min"),
+    ("G80 X1", 31, ""),
+    ("G0 G28 X1", 24, ""),
+    ("G53 G2 X1 I1", 30, ""),
 ])
-def test_bad_lines_move_nothing(line, msg):
+def test_bad_lines_move_nothing(line, code, detail):
     it = Interpreter(CFG)
     it.line("G1 X1 Y1")
     n = len(it.plan.ends)
     reply = it.line(line)
-    assert reply == f"error: line 2: {msg}"
-    assert len(it.plan.ends) == n and it.pos == (1000, 1000)
+    assert reply == f"error:{code}" and detail in it.last_error
+    assert len(it.plan.ends) == n and tuple(it.mp[:2]) == (1000, 1000)
 
 
 def test_coordinates_beyond_the_limit_are_refused():
     it = Interpreter(CFG)
     for _ in range(10):
         reply = it.line("G20 G91 G0 X9999")
-    assert reply == "error: line 10: coordinate out of range"
+    assert reply == "error:33"
 
 
 def test_a_sample_is_its_ticks_unless_the_steps_need_more():

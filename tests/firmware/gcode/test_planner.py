@@ -104,8 +104,8 @@ def test_samples_lie_on_the_programmed_path_and_end_at_rest(pts, feed, arc):
     """Without a shaper every sample is on a block (a line, or an arc's chord) within 1.5 um
     (floor rounding and the Q30 unit vector), and the job ends at rest exactly on the last point."""
     lines = [f"G1 F{feed}", "X1 Y0.5"] + [f"X{x / 1000:.3f} Y{y / 1000:.3f}" for x, y in pts]
-    if arc:
-        lines.append("G2 I3 J0")
+    if arc:  # a full circle: grbl needs its end written out
+        lines.append(f"G2 X{pts[-1][0] / 1000:.3f} Y{pts[-1][1] / 1000:.3f} I3 J0")
     plan, s, p, v = stream(lines)
     ends = np.vstack([[0, 0], np.asarray(plan.ends).reshape(-1, 2)]).astype(float)
     a, b = ends[:-1], ends[1:]

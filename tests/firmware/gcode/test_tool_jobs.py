@@ -1,7 +1,7 @@
 """Jobs in the style of the tools users bring (datasets/jobs/: issue 20's grbl CAM/laser and pen
 plotter jobs, Inkscape's gcodetools, LaserGRBL, LightBurn's grbl output, a Fusion 360 grbl post,
-a slicer's XY moves sent with Marlin checksums), each on the simulated Uno built for the tool it
-names ('; nnik-machine:'): every answer, step and tool change equal to the Python model's."""
+a slicer's XY moves sent with Marlin checksums), each on the simulated Uno built for its tool
+(`nnik job --tool`, --tool-z): every answer, step and tool change equal to the Python model's."""
 
 from __future__ import annotations
 
@@ -10,33 +10,35 @@ from pathlib import Path
 import pytest
 
 from nnik.firmware.config import default_machine
-from nnik.firmware.gcode.job import job_machine, read_job, tool_report
+from nnik.firmware.gcode.job import tool_report
+from nnik.firmware.gcode.job_input import JobOptions, prepare, read_job
+from nnik.firmware.gcode.reader import sendable
 from nnik.firmware.ik_oracle import load_scenario_of
 from tests.firmware.gcode.conftest import run_both
 
 JOBS = Path(__file__).resolve().parents[3] / "datasets" / "jobs"
 
-# job: (tool, the lines the firmware refuses, tool changes at least)
+# job: (tool, Z at or below which it is down (mm), tool changes at least)
 STYLES = {
-    "grbl_cam_laser": ("laser", [], 4),
-    "pen_plotter": ("pen", [], 4),  # down, up, down, up (up is D11 low, as at reset)
-    "inkscape_gcodetools": ("servo", [], 5),
-    "lasergrbl_raster": ("laser", [], 12),
-    "lightburn_grbl": ("laser", [], 4),
-    "fusion360_grbl": ("laser", [], 4),
-    "slicer_xy": ("pen", [], 4),
+    "grbl_cam_laser": ("laser", None, 4),
+    "pen_plotter": ("pen", None, 4),  # down, up, down, up (up is D11 low, as at reset)
+    "inkscape_gcodetools": ("servo", None, 5),
+    "lasergrbl_raster": ("laser", None, 12),
+    "lightburn_grbl": ("laser", None, 4),
+    "fusion360_grbl": ("laser", None, 4),
+    "slicer_xy": ("pen", 0.25, 4),
 }
 
 
 @pytest.mark.parametrize("job", sorted(STYLES))
 def test_tool_style_job_equal_on_the_chip(corexy_run, tool_firmware, job):
-    tool, refused, min_changes = STYLES[job]
-    lines = read_job(JOBS / f"{job}.gcode")
-    cfg = job_machine(lines, default_machine(load_scenario_of(corexy_run)), job)
+    tool, z_mm, min_changes = STYLES[job]
+    prep = prepare(read_job(JOBS / f"{job}.gcode"), default_machine(load_scenario_of(corexy_run)),
+                   JobOptions(tool=tool, tool_z_mm=z_mm), job)
+    cfg = prep.cfg
     assert cfg.tool == tool
-    plan, seg, res = run_both(tool_firmware(cfg), lines)
-    bad = [r for r in plan.replies if r != "ok"]
-    assert bad == refused
+    plan, seg, res = run_both(tool_firmware(cfg), [sendable(ln).decode() for ln in prep.lines])
+    assert set(plan.replies) == {"ok"}
     t = tool_report(seg, cfg)
     assert t["changes"] >= min_changes and len(res.tool) == t["changes"]
     assert t["on_mm"] > 20 and t["travel_mm"] > 5 and t["on_s"] > 0.5

@@ -1,0 +1,59 @@
+/* nnik_imath.c - see nnik_imath.h */
+#include "nnik_imath.h"
+
+/* floor(sqrt(v)) bit by bit, in the width of T (one body for both widths) */
+#define NNIK_ISQRT_BODY(T, v)                                                                   \
+    T r = 0, b = (T)1 << (sizeof(T) * 8 - 2);                                                   \
+    while (b > v)                                                                               \
+        b >>= 2;                                                                                \
+    while (b) {                                                                                 \
+        if (v >= r + b) {                                                                       \
+            v -= r + b;                                                                         \
+            r = (r >> 1) + b;                                                                   \
+        } else {                                                                                \
+            r >>= 1;                                                                            \
+        }                                                                                       \
+        b >>= 2;                                                                                \
+    }                                                                                           \
+    return (uint32_t)r
+
+uint32_t nnik_isqrt32(uint32_t v)
+{
+    NNIK_ISQRT_BODY(uint32_t, v);
+}
+
+uint32_t nnik_isqrt64(uint64_t v)
+{
+    if (v < 0x100000000ULL)
+        return nnik_isqrt32((uint32_t)v); /* 32-bit arithmetic: far cheaper on AVR */
+    {
+        NNIK_ISQRT_BODY(uint64_t, v);
+    }
+}
+
+int32_t nnik_div_round(int64_t a, uint32_t b)
+{
+    uint64_t u = a < 0 ? (uint64_t)(-a) : (uint64_t)a;
+    int32_t q;
+    if (u < 0x40000000UL && b < 0x40000000UL) /* the same value by 32-bit division: far cheaper on AVR */
+        q = (int32_t)((2 * (uint32_t)u + b) / (2 * b));
+    else
+        q = (int32_t)((2 * u + b) / (2 * (uint64_t)b));
+    return a < 0 ? -q : q;
+}
+
+uint64_t nnik_sq2(int32_t x, int32_t y)
+{
+    if (x > -32768L && x < 32768L && y > -32768L && y < 32768L)
+        return (uint32_t)(x * x) + (uint32_t)(y * y);
+    return (uint64_t)((int64_t)x * x) + (uint64_t)((int64_t)y * y);
+}
+
+int64_t nnik_mul_r(int32_t x, uint32_t r)
+{
+    if (x > -65536L && x < 65536L && r < 65536UL) {
+        uint32_t p = (uint32_t)(x < 0 ? -x : x) * r;
+        return x < 0 ? -(int64_t)p : (int64_t)p;
+    }
+    return (int64_t)x * (int64_t)r;
+}

@@ -1,0 +1,146 @@
+"""`nnik job`: a G-code job through the firmware logic in Python and on the simulated Uno."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from rich.console import Console
+from rich.table import Table
+
+from nnik.errors import NnikError
+
+console = Console()
+
+
+def _offset(text: str) -> tuple[float, float]:
+    try:
+        x, y = (float(v) for v in text.split(","))
+    except ValueError:
+        raise NnikError(f"--offset needs X,Y (two numbers), not {text!r}", None, "--offset") from None
+    if not all(abs(v) < 1e6 for v in (x, y)):
+        raise NnikError("--offset must be finite and under 10^6", None, "--offset")
+    return x, y
+
+
+def _scale(text: str) -> float:
+    try:
+        s = float(text)
+    except ValueError:
+        raise NnikError(f"--scale needs a number, not {text!r}", None, "--scale") from None
+    if not 1 / 65536 <= s <= 256:
+        raise NnikError("--scale must be 1/65536..256", None, "--scale")
+    return s
+
+
+def register(sub) -> None:
+    p = sub.add_parser("job", help="run a G-code job through the firmware (Python model and simulated Uno)",
+                       description="Run a G-code file that CAM, a slicer, a laser or plotter tool wrote through the "
+                                   "chip's firmware: its flavour and tool rule are detected (and said), it is planned "
+                                   "with acceleration, shaped, run through the pick's IK in Python and on the simulated "
+                                   "Uno, step for step; the contour error is measured against the programmed path. "
+                                   "Writes OUTDIR/job/JOB.json and JOB.png.")
+    p.add_argument("scenario", help="scenario TOML (its build directory) or a model directory")
+    p.add_argument("job", help="G-code file")
+    p.add_argument("-o", "--outdir", help="model directory (a directory) of the scenario TOML (default build/<name>/); "
+                   "an error with a model directory as the first argument")
+    p.add_argument("--check", action="store_true", help="parse and plan only, as grbl's $C: extent, motion time, "
+                   "tool-on length and every noted word; writes nothing")
+    p.add_argument("--fit", action="store_true", help="scale the job down uniformly (never up) to fit the workspace and "
+                   "centre it")
+    p.add_argument("--scale", type=_scale, help="scale the job by S about the work origin")
+    p.add_argument("--offset", type=_offset, metavar="X,Y", help="move the job by X,Y in its units (mm, or inches for a "
+                   "G20 job)")
+    p.add_argument("--flavour", help="grbl, marlin or linuxcnc (default: detected from the file)")
+    p.add_argument("--tool", help="the machine's tool: laser, pen, servo, spindle, knife or none (default: the "
+                   "scenario's [tool] kind)")
+    p.add_argument("--tool-rule", choices=("s", "z", "e", "m300", "none"),
+                   help="how the job turns the tool on: s (M3/M4 S), z (Z at or below the threshold), e (Marlin: a "
+                        "move that extrudes), m300 (M300 S servo pen), none (default: from the tool and the file)")
+    p.add_argument("--tool-z", type=float, metavar="MM", help="a pen, spindle or knife is down at or below this Z "
+                   "(default: the scenario's [tool] pen_z_um, 0)")
+    p.add_argument("--seg-um", type=int, help="longest arc chord in um (default 500)")
+    p.add_argument("--shaper", metavar="KIND",
+                   help="input shaper on the chip: none, zv, mzv, zvd, ei, or auto (the one that meets [motion] "
+                        "max_contour_um at the least job time); default: the scenario's [motion] shaper")
+    p.add_argument("--precompensate", action="store_true",
+                   help="write OUTDIR/job/JOB_precompensated.gcode (the job rewritten so the modelled belts' tip "
+                        "follows the path) and run that instead")
+    p.add_argument("--no-chip", action="store_true", help="Python model only, no simavr run")
+    p.add_argument("--mcu", choices=("atmega328p", "atmega2560"), default="atmega328p",
+                   help="the simulated chip: the Uno's atmega328p (default) or the Mega's atmega2560")
+    p.set_defaults(func=cmd_job)
+
+
+def _model_dir(args) -> Path:
+    from nnik import pipeline
+
+    if Path(args.scenario).is_dir():
+        out = Path(args.scenario)
+        if args.outdir and Path(args.outdir).resolve() != out.resolve():
+            raise NnikError("-o picks the model directory of a scenario TOML; the first argument is already a model "
+                            "directory, so give one or the other", args.outdir, "-o")
+    else:
+        from nnik.machine.scenario import load_scenario
+
+        scn = load_scenario(args.scenario)
+        out = Path(args.outdir) if args.outdir else pipeline.default_outdir(scn)
+    if not (out / pipeline.MODEL_FILE).is_file():
+        raise NnikError(f"no trained model (run `nnik run {args.scenario}` first)", str(out))
+    return out
+
+
+def print_gcode_summary(g: dict) -> None:
+    console.print(f"flavour: {g['flavour']} ({g['flavour_evidence']})")
+    console.print(f"tool: {g['tool']}, rule {g['tool_rule']} ({g['tool_rule_why']}): {g['moves_tool_on']} tool-on "
+                  f"moves, {g['moves_tool_off']} tool-off moves")
+    if g["extent_mm"]:
+        (x0, y0), (x1, y1) = g["extent_mm"]
+        console.print(f"extent: X {x0:g}..{x1:g} Y {y0:g}..{y1:g} mm from the work origin; frame {g['frame']}")
+    if g["tool"] == "laser" and g["z_range_mm"][0] != g["z_range_mm"][1]:
+        console.print(f"Z (the laser's focus): {g['z_range_mm'][0]:g}..{g['z_range_mm'][1]:g} mm")
+    noted = ", ".join(f"{k} x{v}" for k, v in g["noted"].items())
+    extra = [f"$ lines x{g['dollar_lines']} (the sender's)" if g["dollar_lines"] else "",
+             f"words that replaced one of their modal group x{g['last_word_wins']}" if g["last_word_wins"] else ""]
+    text = ", ".join(t for t in [noted, *extra] if t)
+    console.print(f"noted (no effect on this machine): {text or 'nothing'}")
+
+
+def cmd_job(args) -> None:
+    from nnik.firmware.gcode.job import run_job
+    from nnik.firmware.gcode.job_input import JobOptions
+    from nnik.report.job_summary import JOB_HEADER, job_row
+
+    out = _model_dir(args)
+    from nnik.files.pick_state import require_deliverable
+
+    require_deliverable(out, "job")  # the job runs the firmware: only the verified pick, never the MLP instead
+    opts = JobOptions(flavour=args.flavour, tool=args.tool, tool_rule=args.tool_rule, tool_z_mm=args.tool_z, fit=args.fit,
+                      scale=args.scale, offset=args.offset)
+    res = run_job(out, Path(args.job), seg_um=args.seg_um, use_chip=False if args.no_chip else None,
+                  shaper=args.shaper, precompensate=args.precompensate, opts=opts, check=args.check, mcu=args.mcu)
+    if args.check:
+        print_gcode_summary(res)
+        c = res["check"]
+        console.print(f"check: {res['lines']} lines, {c['blocks']} planner blocks, {c['motion_s']:.2f} s of motion "
+                      f"(planned), tool on {c['tool_on_mm']:.1f} mm, travel {c['travel_mm']:.1f} mm")
+        return
+    print_gcode_summary(res["gcode"])
+    t = Table(title=f"G-code job {res['job']} on {res['scenario']} ({res['seconds']:.2f} s of motion)")
+    t.add_column("item")
+    t.add_column("result")
+    for h, v in zip(JOB_HEADER, job_row(res)):
+        t.add_row(h, v)
+    console.print(t)
+    if res.get("dynamics"):
+        from nnik.report.job_dynamics import print_methods
+
+        print_methods(console, res)
+    chip = res["chip"]
+    if "not_run" not in chip:
+        console.print(f"self-test on simavr: {chip['selftest']}")
+        if chip.get("end_s") is not None:
+            console.print(f"simulated chip: {chip['segments_started']} segments, idle at {chip['end_s']:.3f} s "
+                          f"({chip['motion_s']:.3f} s of motion; the model's {res['seconds']:.3f} s)")
+        if not (chip["steps_equal"] and chip["replies_equal"] and chip["selftest_pass"]):
+            raise NnikError("the simulated chip's steps or answers differ from the Python model", res["job"])
+    console.print(f"plot: {res['png']}; figures: {Path(res['png']).with_suffix('.json')}")

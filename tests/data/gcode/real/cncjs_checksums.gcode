@@ -1,0 +1,8 @@
+N1 G20 (inches)
+N2 G90 (absolute)
+N3 T0*57
+N4 G92 E0*67
+N5 G28*22
+N6 G1 F1500.0*82
+N7 G1 X2.0 Y2.0 F3000.0*85
+N8 G1 X3.0 Y3.0*30 ; checksum failed
