@@ -65,7 +65,7 @@ def run_one(run: Path, cfg, work: Path, jobs=JOBS) -> dict:
     lib = export_arduino(run, work / "lib", cfg)
     name = lib["name"]
     st = chip.run_firmware(chip.build_sketch(work / "lib", f"{name}_selftest", work / "build"), [], work / "build", 5.0)
-    fw = chip.build_sketch(work / "lib", f"{name}_gcode", work / "build", cfg.defines())
+    fw = chip.build_sketch(work / "lib", f"{name}_gcode", work / "build", chip.file_run_defines(cfg))
     ik = ik_oracle(run)
     out = {"flash_bytes": fw.flash_bytes, "ram_bytes": fw.ram_bytes, "shaper_ram_bytes": cfg.shaper_ram_bytes,
            "selftest": next((t for _, t in st.replies if t.startswith(("PASS", "FAIL"))), "no answer"), "jobs": {}}

@@ -247,44 +247,43 @@ NOINLINE static int8_t line_to(nnik_gc_t *g, const int32_t t[3], int32_t feed, u
     return 0;
 }
 
-typedef struct {
-    nnik_gc_t *g;
-    int32_t feed;
-    uint8_t a0, a1, extrude, measure, per_point;
-    int32_t c[2];
-    int32_t last[2];
-    uint32_t length;
-    int8_t err;
-} walk_t;
+/* an arc's or a curve's chord ends, from exec's static state (pushed from exec's own frame: the
+ * planner and the IK below a push need the stack) */
+static nnik_gc_chords_t chords;
+static uint8_t ax0, ax1, per_point; /* the arc's plane axes; Z per chord end (G18/G19) */
 
-/* one chord end q (in the plane, from the centre; Bezier: absolute X Y) */
-static void chord_end(void *ctx, const int32_t q[2])
+static void chords_start(nnik_gc_t *g, uint8_t motion, const int32_t c[2], const int32_t c1[2], const int32_t c2[2],
+                         const int32_t tgt[3], uint32_t rad)
 {
-    walk_t *w = (walk_t *)ctx;
-    nnik_gc_t *g = w->g;
-    int32_t p[3];
-    if (w->err)
+#if NNIK_GC_G5
+    if (motion == 5) {
+        nnik_gc_bezier_start(&chords, g->mp, c1, c2, tgt);
         return;
+    }
+#else
+    (void)c1;
+    (void)c2;
+#endif
+    nnik_gc_arc_start(&chords, g->mp[ax0] - c[0], g->mp[ax1] - c[1], tgt[ax0] - c[0], tgt[ax1] - c[1], rad, motion == 3);
+}
+
+/* the next chord end as a machine point p (X Y Z); 0 at the end */
+static uint8_t chord_next(nnik_gc_t *g, uint8_t motion, const int32_t c[2], int32_t p[3])
+{
+    static int32_t q[2];
+    if (!nnik_gc_chords_next(&chords, q))
+        return 0;
     p[0] = g->mp[0];
     p[1] = g->mp[1];
     p[2] = g->mp[2];
-    p[w->a0] = w->c[0] + q[0];
-    p[w->a1] = w->c[1] + q[1];
-    if (w->measure) {
-        w->length += nnik_isqrt64(nnik_sq2(p[0] - w->last[0], p[1] - w->last[1]));
-        w->last[0] = p[0];
-        w->last[1] = p[1];
-        return;
+    if (motion == 5) {
+        p[0] = q[0];
+        p[1] = q[1];
+    } else {
+        p[ax0] = c[0] + q[0];
+        p[ax1] = c[1] + q[1];
     }
-    if (w->per_point) {
-        g->mp[2] = p[2];
-        g->tool = move_tool(g, 0, w->extrude);
-    }
-    if (p[0] != g->mp[0] || p[1] != g->mp[1]) {
-        w->err = push(g, p, w->feed);
-        g->mp[0] = p[0];
-        g->mp[1] = p[1];
-    }
+    return 1;
 }
 
 #if NNIK_GC_G93
@@ -295,27 +294,6 @@ static int32_t inverse_feed(uint32_t length, int32_t inv_f)
     return f < (uint64_t)MIN_FEED ? MIN_FEED : (f > 0x7fffffffUL ? 0x7fffffffL : (int32_t)f);
 }
 #endif
-
-/* the chord ends of an arc (about c, in the walk's plane) or a Bezier (c1 c2) to tgt */
-NOINLINE static void curve(nnik_gc_t *g, uint8_t motion, const int32_t c[2], const int32_t c1[2], const int32_t c2[2],
-                  const int32_t tgt[3], uint32_t rad, walk_t *w)
-{
-#if NNIK_GC_G5
-    if (motion == 5) {
-        int32_t p0[2];
-        p0[0] = g->mp[0];
-        p0[1] = g->mp[1];
-        w->c[0] = w->c[1] = 0;
-        nnik_gc_bezier(p0, c1, c2, tgt, chord_end, w);
-        return;
-    }
-#else
-    (void)c1;
-    (void)c2;
-#endif
-    nnik_gc_arc(g->mp[w->a0] - c[0], g->mp[w->a1] - c[1], tgt[w->a0] - c[0], tgt[w->a1] - c[1], rad, motion == 3,
-                chord_end, w);
-}
 
 /* the work offset of axis k in system wcs with the tool length offset tlo: machine = work + it */
 NOINLINE static int32_t woff(const nnik_gc_t *g, uint8_t wcs, int32_t tlo, uint8_t k)
@@ -340,11 +318,11 @@ int8_t nnik_gc_exec(nnik_gc_t *g)
     uint8_t e_rel, e_move, seg_blocks;
     uint16_t used = (1U << W_F) | (1U << W_T) | (1U << W_S);
     static int32_t u[W_COUNT];
-    int32_t feed, inv_f = 0, tlo, tgt[3], e_tgt, dwell_ms = -1;
-    int32_t c[2] = {0, 0}, c1[2] = {0, 0}, c2[2] = {0, 0};
+    static int32_t tgt[3], c[2], c1[2], c2[2]; /* static: the stack under an arc's chord is deep */
+    int32_t feed, inv_f = 0, tlo, e_tgt, dwell_ms = -1;
     uint32_t rad = 0;
     uint32_t blk0;
-    static walk_t w;
+    static int32_t p[3];
 
     r = nnik_gc_parse(g->line, &b);
     if (r)
@@ -479,14 +457,9 @@ int8_t nnik_gc_exec(nnik_gc_t *g)
     if (nm == NM_G92 && !axes && !HASW(W_E))
         return -26;
     /* arcs and curves: checked before anything changes */
-    w.g = g;
-    w.extrude = extrude;
-    w.measure = 0;
-    w.length = 0;
-    w.err = 0;
-    w.per_point = 0;
-    w.a0 = 0;
-    w.a1 = 1;
+    ax0 = 0;
+    ax1 = 1;
+    per_point = 0;
     if (moving && (motion == 2 || motion == 3)) {
         uint8_t a0 = PLANE_AXES[plane][0], a1 = PLANE_AXES[plane][1], lin = (uint8_t)(3 - a0 - a1);
         int32_t off[2], x, y, cur[2], e[2];
@@ -531,11 +504,9 @@ int8_t nnik_gc_exec(nnik_gc_t *g)
         re = nnik_isqrt64(nnik_sq2(e[0], e[1]));
         if (re == 0 || (re > rad ? re - rad : rad - re) > 5 + rad / 1000)
             return -33;
-        w.a0 = a0;
-        w.a1 = a1;
-        w.per_point = NNIK_GC_PLANES && plane != 0;
-        w.c[0] = c[0];
-        w.c[1] = c[1];
+        ax0 = a0;
+        ax1 = a1;
+        per_point = NNIK_GC_PLANES && plane != 0;
 #if NNIK_GC_G5
     } else if (moving && motion == 5) {
         if (plane)
@@ -629,24 +600,39 @@ int8_t nnik_gc_exec(nnik_gc_t *g)
 #endif
             r = line_to(g, tgt, f, motion == 0, extrude);
         } else {
-            w.feed = g->feed;
+            int32_t f = g->feed;
 #if NNIK_GC_G93
             if (inv_f) { /* G93: the chords' length first */
-                w.measure = 1;
-                w.last[0] = g->mp[0];
-                w.last[1] = g->mp[1];
-                curve(g, motion, c, c1, c2, tgt, rad, &w);
-                w.measure = 0;
-                w.feed = inverse_feed(w.length, inv_f);
+                uint32_t len = 0;
+                int32_t last[2];
+                last[0] = g->mp[0];
+                last[1] = g->mp[1];
+                chords_start(g, motion, c, c1, c2, tgt, rad);
+                while (chord_next(g, motion, c, p)) {
+                    len += nnik_isqrt64(nnik_sq2(p[0] - last[0], p[1] - last[1]));
+                    last[0] = p[0];
+                    last[1] = p[1];
+                }
+                f = inverse_feed(len, inv_f);
             }
 #endif
-            if (!w.per_point) {
+            if (!per_point) {
                 g->mp[2] = tgt[2];
                 g->tool = move_tool(g, 0, extrude);
             }
-            curve(g, motion, c, c1, c2, tgt, rad, &w);
+            chords_start(g, motion, c, c1, c2, tgt, rad);
+            while (!r && chord_next(g, motion, c, p)) {
+                if (per_point) {
+                    g->mp[2] = p[2];
+                    g->tool = move_tool(g, 0, extrude);
+                }
+                if (p[0] != g->mp[0] || p[1] != g->mp[1]) {
+                    r = push(g, p, f);
+                    g->mp[0] = p[0];
+                    g->mp[1] = p[1];
+                }
+            }
             g->mp[2] = tgt[2];
-            r = w.err;
         }
     }
     if (r)

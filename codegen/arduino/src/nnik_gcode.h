@@ -36,6 +36,11 @@ extern "C" {
 
 #define NNIK_GC_LINE_MAX 79 /* grbl's 80-byte line buffer */
 
+#ifndef NNIK_GC_WCS
+#define NNIK_GC_WCS 1
+#endif
+#define NNIK_GC_N_WCS (NNIK_GC_WCS ? 6 : 1)
+
 /* results of nnik_gc_eol */
 #define NNIK_GC_OK 0     /* done (an empty, comment or '%' line too) */
 #define NNIK_GC_SYNC 1   /* done; answer after the motion has finished (M2, M30, M400) */
@@ -49,7 +54,7 @@ typedef void (*nnik_gc_emit_fn)(nnik_gc_t *g, const int32_t steps[2], uint32_t t
 
 struct nnik_gc {
     int32_t mp[3];        /* machine position, um (X, Y less the work origin; Z the tool's axis) */
-    int32_t coord[6][3];  /* G54..G59 work offsets */
+    int32_t coord[NNIK_GC_N_WCS][3]; /* G54..G59 work offsets (G54's alone without the wcs option) */
     int32_t g92[3];       /* G92 offset */
     int32_t home[2][3];   /* G28, G30 stored positions */
     int32_t tlo;          /* G43.1 tool length offset (Z) */

@@ -47,7 +47,7 @@ extern volatile uint8_t nnik_grbl_rt[4];
 #define GC_COOLANT(g) ((g)->coolant)     /* bit 0: M7, bit 1: M8 */
 #define GC_TOOLNO(g) ((g)->tool_no)      /* T */
 #define GC_Z(g) ((g)->mp[2])             /* Z, um */
-#define GC_COORD(g, i, a) ((g)->coord[i][a]) /* G54..G59 offsets, um */
+#define GC_COORD(g, i, a) ((i) < NNIK_GC_N_WCS ? (g)->coord[i][a] : 0) /* G54..G59 offsets, um */
 #define GC_HOME(g, i, a) ((g)->home[i][a])   /* G28, G30 */
 #define GC_G92(g, a) ((g)->g92[a])
 #define GC_TLO(g) ((g)->tlo)

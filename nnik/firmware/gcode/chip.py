@@ -66,6 +66,13 @@ def common_flags(mcu: str = MCU) -> list[str]:
 COMMON = common_flags(MCU)
 
 
+def file_run_defines(cfg) -> dict[str, str]:
+    """The build of a file run (`nnik job`, the model-equality tests): the planner never flushes on a
+    quiet line (NNIK_GRBL_QUIET_MS 0; the harness ends every job with M400), so the motion depends
+    on the lines alone, as the model's does. A sender's build keeps grbl_config.h's 5 ms."""
+    return {**cfg.defines(), "NNIK_GRBL_QUIET_MS": "0"}
+
+
 def available() -> tuple[bool, str]:
     """(True, "") if avr-gcc, avr-g++, simavr, the Arduino core and libsimavr's headers are there."""
     missing = [t for t in ("avr-gcc", "avr-g++", "avr-size", "simavr", "gcc") if find_tool(t) is None]

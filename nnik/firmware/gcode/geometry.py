@@ -12,7 +12,7 @@ from math import isqrt
 
 from nnik.firmware.gcode.codes import GcodeLineError
 
-ARC_STACK = 24  # a quarter turn of R < 2^28 um needs 23 bisections to 100 um chords
+ARC_STACK = 16  # bisections: chords of 100 um from any piece shorter than 6.5 m (nnik_gc_geom.h)
 BEZIER_NMAX = 1024
 
 

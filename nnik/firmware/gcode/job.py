@@ -67,8 +67,8 @@ def chip_build(outdir: Path, cfg: MachineConfig, workdir: Path, mcu: str = "atme
     try:
         selftest = chip.build_sketch(Path(lib["dir"]), f"{name}_selftest", workdir / "build", mcu=mcu, core_dir=core)
         st = chip.run_firmware(selftest, [], workdir / "build", 5.0)
-        fw = chip.build_sketch(Path(lib["dir"]), f"{name}_gcode", workdir / "build", cfg.defines(), mcu=mcu,
-                               core_dir=core)
+        fw = chip.build_sketch(Path(lib["dir"]), f"{name}_gcode", workdir / "build", chip.file_run_defines(cfg),
+                               mcu=mcu, core_dir=core)
     except TargetError as exc:
         raise NnikError(f"avr: {exc}") from None
     st_line = next((t for _, t in st.replies if t.startswith(("PASS", "FAIL"))), "no answer")
@@ -87,7 +87,7 @@ def chip_job(built: dict, lines: list[str], cfg: MachineConfig, seconds: float, 
         raise NnikError(f"avr: {exc}") from None
     return {"selftest": built["selftest"], "selftest_pass": built["selftest"].startswith("PASS"),
             "flash_bytes": fw.flash_bytes, "ram_bytes": fw.ram_bytes, "state": run.state,
-            "replies": [t for _, t in run.replies if not t.startswith(("nnik ", "Grbl "))], "run": run,
+            "replies": [t for _, t in run.replies if not t.startswith(("nnik ", "Grbl ")) and t], "run": run,
             "events": chip_events(run.steps, run.marks, CLOCK_HZ // cfg.tick_hz),
             "tool_events": chip_tool_events(run.tool, run.marks, CLOCK_HZ // cfg.tick_hz),
             "segments_started": int(len(run.marks)), "end_cycle": run.end_cycle, **motion_times(run)}

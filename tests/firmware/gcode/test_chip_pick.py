@@ -32,7 +32,7 @@ def test_lut_pick_steps_like_the_python_model(galvo_run, tmp_path):
     assert ik_sources(run, impl.problem.name) == run / pipeline.C_DIR
 
     lib = export_arduino(run, tmp_path / "lib")
-    fw = chip.build_sketch(tmp_path / "lib", f"{lib['name']}_gcode", tmp_path / "build")
+    fw = chip.build_sketch(tmp_path / "lib", f"{lib['name']}_gcode", tmp_path / "build", {"NNIK_GRBL_QUIET_MS": "0"})
     lines = faster([ln.decode('latin-1') for ln in split_lines((JOBS / "l_path.gcode").read_bytes())], 2)
     cfg = lib["machine"]
     plan = interpret(lines, cfg)

@@ -27,7 +27,7 @@ def test_banner_ok_and_errors(uno):
     assert port.cmd("G21 G90") == ["ok"]
     assert port.cmd("") == ["ok"]  # grbl answers empty and comment lines too
     assert port.cmd("(a comment) ; and another") == ["ok"]
-    assert port.cmd("G99") == ["error:20"]  # unsupported command
+    assert port.cmd("G7") == ["error:20"]  # unsupported command (lathe diameter mode)
     assert port.cmd("G1 X" + "1" * 80) == ["error:11"]  # more than 79 characters after cleaning
     assert port.cmd("g0 x1 y1 (lower case, comments) ") == ["ok"]
     port.write(b"\x18")
@@ -134,7 +134,7 @@ def test_check_mode_parses_and_moves_nothing(uno):
     assert port.cmd("$C") == ["[MSG:Enabled]", "ok"]
     assert port.status().group(1) == "Check"
     assert port.cmd("G1 X30 F3000") == ["ok"]
-    assert port.cmd("G99") == ["error:20"]
+    assert port.cmd("G7") == ["error:20"]
     time.sleep(0.3)
     assert port.status().group(1, 2) == ("Check", "0.000")
     assert port.cmd("$C") == ["[MSG:Disabled]", "ok"]
