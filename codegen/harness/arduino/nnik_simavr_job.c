@@ -147,8 +147,9 @@ static void on_uart(struct avr_irq_t *irq, uint32_t value, void *param)
         out_len--;
     out_line[out_len] = 0;
     out_len = 0;
-    banner = !started && out_line[0]; /* the first line with text: the firmware is ready (grbl's
-                                          * start-up message begins with an empty line) */
+    /* the first line with text: the firmware is ready (grbl's start-up message begins with an
+     * empty line); its banner again: a soft reset, after which the next line goes out too */
+    banner = (!started && out_line[0]) || strncmp(out_line, "nnik ", 5) == 0 || strncmp(out_line, "Grbl ", 5) == 0;
     started |= banner;
     answer = !banner && (strncmp(out_line, "ok", 2) == 0 || strncmp(out_line, "error:", 6) == 0);
     if (answer && n_replies == n_lines)
