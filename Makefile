@@ -32,7 +32,9 @@ test: setup toolchains
 # 30 random galvos and 20 random belt frames through the ladders, 12 random measured frames' claims,
 # and the G-code firmware's planner and input shaper on the simulated Uno (job time, step rate,
 # sample loop CPU %, flash and SRAM; nnik.bench.motion), seed 003's table (its L path, reference
-# case and ten variations: the tip with each compensation; nnik.bench.seed003)
+# case and ten variations: the tip with each compensation; nnik.bench.seed003), and the speed of
+# `nnik job` on a 305 s raster: the Python model alone and with the simulated Uno, each over the
+# whole command, as times real time (nnik.bench.job_speed)
 bench: setup toolchains
 	$(PYTHON) -m nnik.bench.mlp $(SCENARIO)
 	$(PYTHON) -m nnik.bench.families
@@ -40,6 +42,7 @@ bench: setup toolchains
 	$(PYTHON) -m nnik.bench.search
 	$(PYTHON) -m nnik.bench.motion
 	$(PYTHON) -m nnik.bench.seed003
+	$(PYTHON) -m nnik.bench.job_speed
 	$(PYTHON) -m nnik.estimate sweep
 	$(PYTHON) -m nnik.estimate sweep --kernel fast --tanh '' --arch 4 --arch 6 --arch 8 --arch 10 --arch 12 --arch 16
 	NNIK_HYPOTHESIS_EXAMPLES=300 $(PYTHON) -m pytest -q tests/firmware/gcode/test_gcode_hypothesis.py

@@ -66,6 +66,8 @@ def register(sub) -> None:
                    help="write OUTDIR/job/JOB_precompensated.gcode (the job rewritten so the modelled belts' tip "
                         "follows the path) and run that instead")
     p.add_argument("--no-chip", action="store_true", help="Python model only, no simavr run")
+    p.add_argument("--mcu", choices=("atmega328p", "atmega2560"), default="atmega328p",
+                   help="the simulated chip: the Uno's atmega328p (default) or the Mega's atmega2560")
     p.set_defaults(func=cmd_job)
 
 
@@ -115,7 +117,7 @@ def cmd_job(args) -> None:
     opts = JobOptions(flavour=args.flavour, tool=args.tool, tool_rule=args.tool_rule, tool_z_mm=args.tool_z, fit=args.fit,
                       scale=args.scale, offset=args.offset)
     res = run_job(out, Path(args.job), seg_um=args.seg_um, use_chip=False if args.no_chip else None,
-                  shaper=args.shaper, precompensate=args.precompensate, opts=opts, check=args.check)
+                  shaper=args.shaper, precompensate=args.precompensate, opts=opts, check=args.check, mcu=args.mcu)
     if args.check:
         print_gcode_summary(res)
         c = res["check"]

@@ -1,9 +1,9 @@
 /*
- * nnik_simavr_job - run a G-code sketch (examples/NAME_gcode) on a simulated ATmega328P
- * (simavr, 16 MHz), send it a job over UART0 one line at a time (the next line only after
- * the answer to the previous one, as a G-code sender does) and record, with cycle times:
+ * nnik_simavr_job - run a G-code sketch (examples/NAME_gcode) on a simulated ATmega328P or
+ * ATmega2560 (simavr, 16 MHz), send it a job over UART0 one line at a time (the next line only
+ * after the answer to the previous one, as a G-code sender does) and record, with cycle times:
  *
- *   R <cycle> <text>        a line the firmware printed (banner, "ok", "error: ...")
+ *   R <cycle> <text>        a line the firmware printed (banner, "ok", "error:...", "[MSG:...]")
  *   D <cycle> <text>        the answer to the drain query sent after the job (DRAIN below);
  *                           the cycle is when the motion pin (PD7) last fell: the machine's
  *                           queue ran dry after its last tick (0: no segment ever ran)
@@ -11,20 +11,31 @@
  *                           pin level then (PD5, PD6)
  *   M <cycle>               the segment marker (PD4) changed: a segment started
  *   B <cycle> <0|1>         the busy pin (PB0): a segment is being computed
- *   T <cycle> <duty>        the tool's PWM on D11 (Timer2's OCR2A, as simavr's timer reports
- *                           it in fast PWM mode) changed
+ *   T <cycle> <duty>        the tool's PWM (Timer2's OCR2A, as simavr's timer reports it in
+ *                           fast PWM mode; OC2A is D11 = PB3 on the Uno, D10 = PB4 on the Mega)
+ *                           changed
  *   E <cycle> <state> <replies>   the end (state: "done", "halted", "timeout", "crashed")
  *
- * usage: nnik_simavr_job FIRMWARE.elf JOB_LINES MAX_SECONDS
- * JOB_LINES holds the lines to send, one per line.  After the answer to the last line the
- * harness sends DRAIN (M400: the sketch answers it once its segment queue is empty and the last
- * step is out), so the run covers all the motion however the job ends; the run ends with the
- * answer to DRAIN, after MAX_SECONDS of simulated time, when the firmware halts (the self-test)
- * or when it crashes.
+ * The sketch drives raw PORTD/PORTB bits, the same port bits on both chips.
+ *
+ * usage: nnik_simavr_job [-m MCU] [-e EVENTS] FIRMWARE.elf JOB_LINES MAX_SECONDS
+ * JOB_LINES holds the lines to send, one per line.  The first line with text the firmware prints
+ * (its banner: "nnik NAME ready", or grbl's "Grbl 1.1h ['$' for help]") starts the job; a line that
+ * starts with "ok" or "error:" answers the line sent and the next is sent; any other line is
+ * only recorded.  After the answer to the last line the harness sends DRAIN (M400: the sketch
+ * answers it once its segment queue is empty and the last step is out), so the run covers all
+ * the motion however the job ends; the run ends with the answer to DRAIN, after MAX_SECONDS of
+ * simulated time, when the firmware halts (the self-test) or when it crashes.
+ * With -e, the S/M/B/T events go to the file EVENTS as binary records instead of text lines
+ * (struct event below: little-endian uint64 cycle, uint32 tag 'S'/'M'/'B'/'T', int32 value: for
+ * S motor | dir << 1, for B the level, for T the duty, for M 0), and stdout keeps R/D/E, each
+ * flushed as it is printed (a reader shows the job's progress from the answers).
+ * MCU: atmega328p (default) or atmega2560.
  */
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include <simavr/sim_avr.h>
 #include <simavr/sim_elf.h>
@@ -32,11 +43,24 @@
 #include <simavr/avr_ioport.h>
 #include <simavr/avr_uart.h>
 #include <simavr/avr_timer.h>
+#include <simavr/avr_extint.h>
 
 #define CLOCK_HZ 16000000UL
 #define DRAIN "M400\n"
 
+struct event {
+    uint64_t cycle;
+    uint32_t tag;
+    int32_t value;
+};
+
+#define EVENT_BUF 4096
+
 static avr_t *avr;
+static FILE *events;          /* NULL: events as text lines on stdout */
+static struct event ebuf[EVENT_BUF];
+static size_t n_ebuf;
+static int started;           /* the firmware printed its first line */
 static avr_irq_t *uart_in;
 static char *job;             /* all lines, '\n'-terminated */
 static size_t job_len, job_pos, line_end;
@@ -46,6 +70,39 @@ static char out_line[256];
 static size_t out_len;
 static unsigned long long idle_fall; /* the motion pin's last falling edge */
 static int duty_seen;                /* the tool's last duty (0 at reset) */
+
+static void flush_events(void)
+{
+    if (n_ebuf && fwrite(ebuf, sizeof ebuf[0], n_ebuf, events) != n_ebuf) {
+        fprintf(stderr, "cannot write the events\n");
+        exit(2);
+    }
+    n_ebuf = 0;
+}
+
+static void event(char tag, int value)
+{
+    if (!events) {
+        if (tag == 'S')
+            printf("S %llu %d %d\n", (unsigned long long)avr->cycle, value & 1, value >> 1);
+        else if (tag == 'M')
+            printf("M %llu\n", (unsigned long long)avr->cycle);
+        else
+            printf("%c %llu %d\n", tag, (unsigned long long)avr->cycle, value);
+        return;
+    }
+    ebuf[n_ebuf].cycle = avr->cycle;
+    ebuf[n_ebuf].tag = (uint32_t)(unsigned char)tag;
+    ebuf[n_ebuf].value = value;
+    if (++n_ebuf == EVENT_BUF)
+        flush_events();
+}
+
+/* no host sleep while the firmware sleeps: simavr then skips the cycles to its next timer */
+static void no_sleep(avr_t *a, avr_cycle_count_t howlong)
+{
+    (void)a; (void)howlong;
+}
 
 static void pump(void)
 {
@@ -86,14 +143,21 @@ static void on_uart(struct avr_irq_t *irq, uint32_t value, void *param)
             out_line[out_len++] = (char)value;
         return;
     }
+    while (out_len && out_line[out_len - 1] == '\r') /* grbl ends its lines with \r\n */
+        out_len--;
     out_line[out_len] = 0;
     out_len = 0;
-    banner = strncmp(out_line, "nnik ", 5) == 0 || strncmp(out_line, "Grbl ", 5) == 0;
-    answer = strcmp(out_line, "ok") == 0 || strncmp(out_line, "error:", 6) == 0;
+    /* the first line with text: the firmware is ready (grbl's start-up message begins with an
+     * empty line); its banner again: a soft reset, after which the next line goes out too */
+    banner = (!started && out_line[0]) || strncmp(out_line, "nnik ", 5) == 0 || strncmp(out_line, "Grbl ", 5) == 0;
+    started |= banner;
+    answer = !banner && (strncmp(out_line, "ok", 2) == 0 || strncmp(out_line, "error:", 6) == 0);
     if (answer && n_replies == n_lines)
         printf("D %llu %s\n", idle_fall, out_line);
     else
         printf("R %llu %s\n", (unsigned long long)avr->cycle, out_line);
+    if (events)
+        fflush(stdout); /* the reader's progress */
     if (banner || answer) {
         if (answer)
             n_replies++;
@@ -112,13 +176,13 @@ static void on_pin(struct avr_irq_t *irq, uint32_t value, void *param)
         return;
     pin_state[port][bit] = (int)value;
     if (port == 1 && (bit == 2 || bit == 3) && value)
-        printf("S %llu %d %d\n", (unsigned long long)avr->cycle, bit - 2, pin_state[1][bit + 3]);
+        event('S', (bit - 2) | pin_state[1][bit + 3] << 1);
     else if (port == 1 && bit == 4)
-        printf("M %llu\n", (unsigned long long)avr->cycle);
+        event('M', 0);
     else if (port == 1 && bit == 7 && !value)
         idle_fall = avr->cycle;
     else if (port == 0 && bit == 0)
-        printf("B %llu %u\n", (unsigned long long)avr->cycle, value);
+        event('B', (int)value);
 }
 
 static void on_pwm(struct avr_irq_t *irq, uint32_t value, void *param)
@@ -127,7 +191,7 @@ static void on_pwm(struct avr_irq_t *irq, uint32_t value, void *param)
     if ((int)value == duty_seen)
         return;
     duty_seen = (int)value;
-    printf("T %llu %u\n", (unsigned long long)avr->cycle, value);
+    event('T', (int)value);
 }
 
 static void watch(char port, int bit, int code)
@@ -143,12 +207,28 @@ int main(int argc, char **argv)
     uint32_t flags = 0;
     unsigned long long limit;
     const char *state = "done";
-    int i, rc;
+    int i, rc, opt;
+    const char *mcu = "atmega328p";
 
-    if (argc != 4) {
-        fprintf(stderr, "usage: %s FIRMWARE.elf JOB_LINES MAX_SECONDS\n", argv[0]);
+    while ((opt = getopt(argc, argv, "m:e:")) != -1) {
+        if (opt == 'm') {
+            mcu = optarg;
+        } else if (opt == 'e') {
+            events = fopen(optarg, "wb");
+            if (!events) {
+                fprintf(stderr, "cannot write %s\n", optarg);
+                return 2;
+            }
+        } else {
+            optind = argc + 1;
+            break;
+        }
+    }
+    if (argc - optind != 3) {
+        fprintf(stderr, "usage: %s [-m MCU] [-e EVENTS] FIRMWARE.elf JOB_LINES MAX_SECONDS\n", argv[0]);
         return 2;
     }
+    argv += optind - 1;
     memset(&fw, 0, sizeof fw);
     if (elf_read_firmware(argv[1], &fw) != 0) {
         fprintf(stderr, "cannot read %s\n", argv[1]);
@@ -174,15 +254,22 @@ int main(int argc, char **argv)
     job_len += sizeof DRAIN - 1;
     limit = (unsigned long long)(atof(argv[3]) * CLOCK_HZ);
 
-    avr = avr_make_mcu_by_name("atmega328p");
+    avr = avr_make_mcu_by_name(mcu);
     if (!avr) {
-        fprintf(stderr, "simavr has no atmega328p\n");
+        fprintf(stderr, "simavr has no %s\n", mcu);
         return 2;
     }
     avr_init(avr);
     avr->frequency = CLOCK_HZ;
     avr_load_firmware(avr, &fw);
     avr->frequency = CLOCK_HZ;
+    avr->sleep = no_sleep;
+    /* INT0/INT1 share their pins with the STEP outputs (PD2, PD3; INT2/INT3 are PD2/PD3 on the
+     * Mega); the sketch never enables them, but simavr's strict low-level triggering polls such
+     * a pin every cycle while it is low (5x the whole run's time): off, they act as edge
+     * interrupts, which do nothing here with EIMSK = 0 */
+    for (i = 0; i < 8; i++)
+        avr_extint_set_strict_lvl_trig(avr, (uint8_t)i, 0);
 
     /* no console echo of the UART, no host sleeps while the firmware polls it */
     avr_ioctl(avr, AVR_IOCTL_UART_GET_FLAGS('0'), &flags);
@@ -210,6 +297,13 @@ int main(int argc, char **argv)
         if (avr->cycle > limit) {
             state = "timeout";
             break;
+        }
+    }
+    if (events) {
+        flush_events();
+        if (fclose(events) != 0) {
+            fprintf(stderr, "cannot write the events\n");
+            return 2;
         }
     }
     printf("E %llu %s %d\n", (unsigned long long)avr->cycle, state, n_replies);

@@ -43,6 +43,7 @@
 #include <simavr/avr_ioport.h>
 #include <simavr/avr_uart.h>
 #include <simavr/avr_timer.h>
+#include <simavr/avr_extint.h>
 
 #define CLOCK_HZ 16000000ULL
 #define SLICE_CYCLES 16000ULL /* 1 ms of the chip between looks at the terminal */
@@ -247,6 +248,10 @@ int main(int argc, char **argv)
     avr_load_firmware(avr, &fw);
     avr->frequency = CLOCK_HZ;
     avr->sleep = no_sleep;
+    /* INT0/INT1 are the STEP pins: simavr's strict low-level triggering would poll them on every
+     * cycle while low (the sketch never enables them); off, as in nnik_simavr_job.c */
+    for (i = 0; i < 8; i++)
+        avr_extint_set_strict_lvl_trig(avr, (uint8_t)i, 0);
     avr_ioctl(avr, AVR_IOCTL_UART_GET_FLAGS('0'), &flags);
     flags &= ~(uint32_t)(AVR_UART_FLAG_STDIO | AVR_UART_FLAG_POLL_SLEEP);
     avr_ioctl(avr, AVR_IOCTL_UART_SET_FLAGS('0'), &flags);

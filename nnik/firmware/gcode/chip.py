@@ -1,7 +1,8 @@
 """Build the library's sketches with Debian's Arduino AVR core and run them on simavr.
 
-Build: avr-gcc/avr-g++ straight over the core's sources (arduino-core-avr, the Uno's
-ATmega328P at 16 MHz, the IDE's flags), the sketch and the library's src/. Run: the harness
+Build: avr-gcc/avr-g++ straight over the core's sources (arduino-core-avr, the IDE's flags; the
+Uno's ATmega328P at 16 MHz by default, or the Mega's ATmega2560: MCUS), the sketch and the
+library's src/, the compiles two at a time. Run: the harness
 codegen/harness/arduino/nnik_simavr_job.c (linked against libsimavr) sends a job over UART0
 and records every STEP/DIR edge, the segment marker and the busy pin with cycle times. After
 the job's last line it sends M400 and waits for the answer, so every queued segment runs however
@@ -23,16 +24,46 @@ from nnik.targets.toolchain import HARNESS_DIR, TargetError, find_tool, run
 CORE_ROOT = Path(os.environ.get("NNIK_ARDUINO_AVR", "/usr/share/arduino/hardware/arduino/avr"))
 SIMAVR_HEADER = Path("/usr/include/simavr/sim_avr.h")
 HARNESS_SRC = HARNESS_DIR / "arduino" / "nnik_simavr_job.c"
-MCU = "atmega328p"
 CLOCK_HZ = 16_000_000
-FLASH_BYTES = 32 * 1024 - 512  # the Uno's optiboot takes 512 B
-RAM_BYTES = 2048
-COMMON = [f"-mmcu={MCU}", f"-DF_CPU={CLOCK_HZ}L", "-DARDUINO=10807", "-DARDUINO_AVR_UNO", "-DARDUINO_ARCH_AVR",
-          "-Os", "-g0", "-ffunction-sections", "-fdata-sections", "-mcall-prologues", "-Wall"]
+
+
+@dataclass(frozen=True)
+class Mcu:
+    """A board's chip: the Arduino core's variant and board macro, what a sketch may use."""
+
+    name: str  # avr-gcc's -mmcu and simavr's core
+    variant: str  # the Arduino core's variants/<variant>/pins_arduino.h
+    board: str  # the IDE's -DARDUINO_AVR_<board>
+    flash_bytes: int  # program flash less the bootloader
+    ram_bytes: int
+
+
+MCUS = {
+    "atmega328p": Mcu("atmega328p", "standard", "ARDUINO_AVR_UNO", 32 * 1024 - 512, 2048),  # optiboot: 512 B
+    "atmega2560": Mcu("atmega2560", "mega", "ARDUINO_AVR_MEGA2560", 256 * 1024 - 8192, 8192),  # stk500v2: 8 KiB
+}
+MCU = "atmega328p"
+FLASH_BYTES = MCUS[MCU].flash_bytes
+RAM_BYTES = MCUS[MCU].ram_bytes
 C_FLAGS = ["-std=gnu11"]
 # Debian's avr-gcc 5.4 <float.h> defines DECIMAL_DIG for C only; WString.cpp needs it in C++
 CXX_FLAGS = ["-std=gnu++11", "-fpermissive", "-fno-exceptions", "-fno-threadsafe-statics",
              "-DDECIMAL_DIG=__DECIMAL_DIG__"]
+
+
+def mcu_of(name: str) -> Mcu:
+    if name not in MCUS:
+        raise TargetError(f"unknown MCU {name!r}; known: {', '.join(MCUS)}")
+    return MCUS[name]
+
+
+def common_flags(mcu: str = MCU) -> list[str]:
+    m = mcu_of(mcu)
+    return [f"-mmcu={m.name}", f"-DF_CPU={CLOCK_HZ}L", "-DARDUINO=10807", f"-D{m.board}", "-DARDUINO_ARCH_AVR",
+            "-Os", "-g0", "-ffunction-sections", "-fdata-sections", "-mcall-prologues", "-Wall"]
+
+
+COMMON = common_flags(MCU)
 
 
 def file_run_defines(cfg) -> dict[str, str]:
@@ -60,19 +91,27 @@ def _require() -> None:
         raise TargetError(why)
 
 
-def _includes() -> list[str]:
-    return [f"-I{CORE_ROOT / 'cores' / 'arduino'}", f"-I{CORE_ROOT / 'variants' / 'standard'}"]
+def _includes(mcu: str = MCU) -> list[str]:
+    return [f"-I{CORE_ROOT / 'cores' / 'arduino'}", f"-I{CORE_ROOT / 'variants' / mcu_of(mcu).variant}"]
 
 
-def _compile(src: Path, obj: Path, extra: list[str], cwd: Path) -> Path:
+def _compile(src: Path, obj: Path, extra: list[str], cwd: Path, mcu: str = MCU) -> Path:
     if src.suffix in (".cpp", ".ino"):
-        cmd = [find_tool("avr-g++"), *COMMON, *CXX_FLAGS, "-x", "c++"]
+        cmd = [find_tool("avr-g++"), *common_flags(mcu), *CXX_FLAGS, "-x", "c++"]
     elif src.suffix == ".S":
-        cmd = [find_tool("avr-gcc"), *COMMON, "-x", "assembler-with-cpp"]
+        cmd = [find_tool("avr-gcc"), *common_flags(mcu), "-x", "assembler-with-cpp"]
     else:
-        cmd = [find_tool("avr-gcc"), *COMMON, *C_FLAGS]
-    run([*cmd, *_includes(), *extra, "-c", src, "-o", obj], f"compile {src.name}", cwd=cwd, log=obj.with_suffix(".log"))
+        cmd = [find_tool("avr-gcc"), *common_flags(mcu), *C_FLAGS]
+    run([*cmd, *_includes(mcu), *extra, "-c", src, "-o", obj], f"compile {src.name}", cwd=cwd, log=obj.with_suffix(".log"))
     return obj
+
+
+def _compile_all(jobs: list[tuple], cwd: Path, mcu: str) -> list[Path]:
+    """_compile over (src, obj, extra) on every core (the compiles are independent processes)."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    with ThreadPoolExecutor(max_workers=max(1, os.cpu_count() or 1)) as ex:
+        return list(ex.map(lambda j: _compile(j[0], j[1], j[2], cwd, mcu), jobs))
 
 
 def _absolute(*paths) -> list[Path]:
@@ -81,21 +120,26 @@ def _absolute(*paths) -> list[Path]:
     return [Path(p).resolve() for p in paths]
 
 
-def build_core(workdir: Path) -> Path:
-    """core.a of the Arduino AVR core for the Uno (cached in workdir)."""
+def build_core(workdir: Path, mcu: str = MCU) -> Path:
+    """core.a of the Arduino AVR core for the MCU's board (cached in workdir/core-MCU, keyed by
+    the compiler's flags: a cache built with other flags is rebuilt)."""
     _require()
     core = CORE_ROOT / "cores" / "arduino"
     (workdir,) = _absolute(workdir)
-    out = workdir / "core"
+    out = workdir / f"core-{mcu}"
     lib = out / "core.a"
-    if lib.is_file():
+    key = hashlib.sha256(" ".join([*common_flags(mcu), *CXX_FLAGS, *C_FLAGS, *_includes(mcu)]).encode()).hexdigest()
+    stamp = out / "flags.sha256"
+    if lib.is_file() and stamp.is_file() and stamp.read_text() == key:
         return lib
     out.mkdir(parents=True, exist_ok=True)
     srcs = sorted(p for p in core.iterdir() if p.suffix in (".c", ".cpp", ".S"))
-    objs = [_compile(s, out / f"{s.name}.o", [], out) for s in srcs]
+    objs = _compile_all([(s, out / f"{s.name}.o", []) for s in srcs], out, mcu)
     tmp = out / "core.a.tmp"
+    tmp.unlink(missing_ok=True)
     run([find_tool("avr-ar") or "avr-ar", "rcs", tmp, *objs], "avr-ar core", cwd=out)
     tmp.rename(lib)
+    stamp.write_text(key)
     return lib
 
 
@@ -104,22 +148,27 @@ class Firmware:
     elf: Path
     flash_bytes: int
     ram_bytes: int
+    mcu: str = MCU
 
 
-def build_sketch(libdir: Path, example: str, workdir: Path, defines: dict | None = None) -> Firmware:
-    """Compile examples/EXAMPLE/EXAMPLE.ino with the library's src/ and the core; link; size.
-    defines: macros for the sketch and src/ (the tool's, MachineConfig.defines())."""
+def build_sketch(libdir: Path, example: str, workdir: Path, defines: dict | None = None, mcu: str = MCU,
+                 core_dir: Path | None = None) -> Firmware:
+    """Compile examples/EXAMPLE/EXAMPLE.ino with the library's src/ and the core for the MCU's
+    board; link; size (flash: .text + .data; RAM: .data + .bss), checked against the MCU's
+    limits. defines: macros for the sketch and src/ (the tool's, MachineConfig.defines());
+    core_dir: where the core is cached (default workdir: one build for sketches that share it)."""
     libdir, workdir = _absolute(libdir, workdir)
-    core = build_core(workdir)
+    m = mcu_of(mcu)
+    core = build_core(core_dir if core_dir is not None else workdir, mcu)
     sketch = libdir / "examples" / example / f"{example}.ino"
-    bdir = workdir / example
+    bdir = workdir / (example if mcu == MCU else f"{example}-{mcu}")
     bdir.mkdir(parents=True, exist_ok=True)
     inc = [f"-I{libdir / 'src'}", *(f"-D{k}={v}" for k, v in (defines or {}).items())]
-    objs = [_compile(sketch, bdir / f"{example}.ino.o", inc, bdir)]
-    for src in sorted((libdir / "src").glob("*.c")):
-        objs.append(_compile(src, bdir / f"{src.name}.o", inc, bdir))
+    jobs = [(sketch, bdir / f"{example}.ino.o", inc)]
+    jobs += [(src, bdir / f"{src.name}.o", inc) for src in sorted((libdir / "src").glob("*.c"))]
+    objs = _compile_all(jobs, bdir, mcu)
     elf = bdir / f"{example}.elf"
-    run([find_tool("avr-gcc"), f"-mmcu={MCU}", "-Os", "-Wl,--gc-sections", "-o", elf, *objs, core, "-lm"],
+    run([find_tool("avr-gcc"), f"-mmcu={m.name}", "-Os", "-Wl,--gc-sections", "-o", elf, *objs, core, "-lm"],
         f"link {example}", cwd=bdir, log=bdir / "link.log")
     res = run([find_tool("avr-size"), "-A", elf], "avr-size", cwd=bdir)
     sec = {}
@@ -127,7 +176,11 @@ def build_sketch(libdir: Path, example: str, workdir: Path, defines: dict | None
         parts = line.split()
         if len(parts) >= 2 and parts[0].startswith(".") and parts[1].isdigit():
             sec[parts[0]] = int(parts[1])
-    return Firmware(elf, sec.get(".text", 0) + sec.get(".data", 0), sec.get(".data", 0) + sec.get(".bss", 0))
+    fw = Firmware(elf, sec.get(".text", 0) + sec.get(".data", 0), sec.get(".data", 0) + sec.get(".bss", 0), mcu)
+    if fw.flash_bytes > m.flash_bytes or fw.ram_bytes > m.ram_bytes:
+        raise TargetError(f"{example} does not fit the {mcu}: flash {fw.flash_bytes} of {m.flash_bytes} B, "
+                          f"RAM {fw.ram_bytes} of {m.ram_bytes} B")
+    return fw
 
 
 def build_harness(workdir: Path) -> Path:
@@ -210,19 +263,17 @@ def parse_events(text: str) -> ChipRun:
                    end_cycle, state, idle_cycle, np.asarray(tool, dtype=np.int64).reshape(-1, 2))
 
 
-def run_firmware(fw: Firmware, lines: list[str], workdir: Path, max_seconds: float) -> ChipRun:
+def run_firmware(fw: Firmware, lines: list[str], workdir: Path, max_seconds: float, mcu: str | None = None,
+                 progress=None) -> ChipRun:
     """Send lines to the firmware on simavr, then M400; the run ends when that is answered (all
-    the motion done; state "done"), the firmware halts, crashes or max_seconds pass."""
+    the motion done; state "done"), the firmware halts, crashes or max_seconds pass. mcu: the
+    simulated chip (default the one fw was built for); progress(answers so far, the answer's cycle)
+    after each answer."""
+    from nnik.firmware.gcode.simrun import run_harness
+
     workdir, elf = _absolute(workdir, fw.elf)
-    exe = build_harness(workdir)
-    job = workdir / "job_lines.txt"
-    job.write_bytes("".join(f"{ln}\n" for ln in lines).encode("latin-1"))
-    res = run([exe, elf, job, f"{max_seconds:g}"], "simavr job", cwd=workdir,
-              timeout=120 + 60 * max_seconds, log=None)
-    chip = parse_events(res.stdout)
-    if chip.state == "missing":
-        raise TargetError("simavr job: the harness reported no end")
-    return chip
+    mcu_of(mcu or fw.mcu)
+    return run_harness(build_harness(workdir), elf, lines, workdir, max_seconds, mcu or fw.mcu, progress)
 
 
 def tool_missing_reason() -> str | None:

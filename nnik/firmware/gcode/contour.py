@@ -27,42 +27,165 @@ def _stats(d: np.ndarray) -> dict:
 
 
 def _line_dist(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    return _line_geo_dist(p, _line_geo(a, b))
+
+
+def _line_geo(a: np.ndarray, b: np.ndarray) -> tuple:
     ab = b - a
-    L2 = float(ab @ ab)
+    return a, ab, float(ab @ ab)
+
+
+def _line_geo_dist(p: np.ndarray, geo: tuple) -> np.ndarray:
+    a, ab, L2 = geo
     t = np.zeros(len(p)) if L2 == 0 else np.clip(((p - a) @ ab) / L2, 0.0, 1.0)
     return np.linalg.norm(p - (a + t[:, None] * ab), axis=1)
 
 
+def _ang(v: np.ndarray):
+    return np.arctan2(v[..., 1], v[..., 0])
+
+
 def _arc_dist(p: np.ndarray, c: np.ndarray, r: float, a: np.ndarray, b: np.ndarray, ccw: bool) -> np.ndarray:
     """Distance to the arc from a to b about c (radius r), counter-clockwise if ccw."""
-    ang = lambda v: np.arctan2(v[..., 1], v[..., 0])  # noqa: E731
-    a0, b0 = ang(a - c), ang(b - c)
+    return _arc_geo_dist(p, _arc_geo(c, r, a, b, ccw))
+
+
+def _arc_geo(c: np.ndarray, r: float, a: np.ndarray, b: np.ndarray, ccw: bool) -> tuple:
+    a0, b0 = _ang(a - c), _ang(b - c)
     sweep = (b0 - a0) % (2 * np.pi) if ccw else (a0 - b0) % (2 * np.pi)
     if sweep == 0:
         sweep = 2 * np.pi  # end = start: a full turn
-    rel = (ang(p - c) - a0) % (2 * np.pi) if ccw else (a0 - ang(p - c)) % (2 * np.pi)
+    return c, r, a, b, ccw, a0, sweep
+
+
+def _arc_geo_dist(p: np.ndarray, geo: tuple) -> np.ndarray:
+    c, r, a, b, ccw, a0, sweep = geo
+    rel = (_ang(p - c) - a0) % (2 * np.pi) if ccw else (a0 - _ang(p - c)) % (2 * np.pi)
     radial = np.abs(np.linalg.norm(p - c, axis=1) - r)
     ends = np.minimum(np.linalg.norm(p - a, axis=1), np.linalg.norm(p - b, axis=1))
     return np.where(rel <= sweep, radial, ends)
 
 
-def move_dist(p_mm: np.ndarray, mv: Move, origin_mm: np.ndarray) -> np.ndarray:
+def _move_geo(mv: Move, origin_mm: np.ndarray) -> tuple:
+    """What move_dist takes from a move before it looks at the points."""
     a = origin_mm + np.asarray(mv.start) / 1000.0
     b = origin_mm + np.asarray(mv.end) / 1000.0
     if mv.kind == "line":
-        return _line_dist(p_mm, a, b)
+        return _line_geo_dist, _line_geo(a, b)
     c = origin_mm + np.asarray(mv.center) / 1000.0
-    return _arc_dist(p_mm, c, mv.radius / 1000.0, a, b, mv.ccw)
+    return _arc_geo_dist, _arc_geo(c, mv.radius / 1000.0, a, b, mv.ccw)
+
+
+def move_dist(p_mm: np.ndarray, mv: Move, origin_mm: np.ndarray) -> np.ndarray:
+    fn, geo = _move_geo(mv, origin_mm)
+    return fn(p_mm, geo)
+
+
+_GEOMETRY: list = [None, None, None]  # moves, origin, arrays: the last job's (four passes use it)
+
+
+def _geometry(moves: list[Move], origin_mm: np.ndarray) -> dict:
+    """Every move's _move_geo as arrays (rows: moves), for distances to many moves at once."""
+    key = np.asarray(origin_mm, dtype=np.float64).tolist()
+    if _GEOMETRY[0] is moves and _GEOMETRY[1] == key and len(_GEOMETRY[2]["r"]) == len(moves):
+        return _GEOMETRY[2]
+    _GEOMETRY[:] = [moves, key, _geometry_of(moves, origin_mm)]
+    return _GEOMETRY[2]
+
+
+def _geometry_of(moves: list[Move], origin_mm: np.ndarray) -> dict:
+    n = len(moves)
+    g = {"arc": np.zeros(n, bool), "a": np.zeros((n, 2)), "b": np.zeros((n, 2)), "ab": np.zeros((n, 2)),
+         "L2": np.zeros(n), "c": np.zeros((n, 2)), "r": np.zeros(n), "ccw": np.zeros(n, bool), "a0": np.zeros(n),
+         "sweep": np.zeros(n)}
+    for k, mv in enumerate(moves):
+        fn, geo = _move_geo(mv, origin_mm)
+        if fn is _line_geo_dist:
+            g["a"][k], g["ab"][k], g["L2"][k] = geo
+        else:
+            g["arc"][k] = True
+            g["c"][k], g["r"][k], g["a"][k], g["b"][k], g["ccw"][k], g["a0"][k], g["sweep"][k] = geo
+    return g
+
+
+def _dist_to(p: np.ndarray, g: dict, n: np.ndarray, gm: np.ndarray) -> np.ndarray:
+    """Distance of each point to its group's move (inf: none), as _line_geo_dist / _arc_geo_dist
+    give it. The points are groups of consecutive rows (n[j] of them, move gm[j], -1: none), sorted
+    by size; the groups of one size are one (groups, size, 2) array and every operation runs on it
+    with each group's own move broadcast, so each group's arithmetic is move_dist's, the line's dot
+    product included: BLAS rounds a row by its place in its matrix, and the stacked matmul is a
+    gemv per group, each group its own matrix as in move_dist."""
+    d = np.full(len(p), np.inf)
+    start = np.cumsum(n) - n
+    sizes, first, many = np.unique(n, return_index=True, return_counts=True)
+    for size, j0, cnt in zip(sizes.tolist(), first.tolist(), many.tolist()):
+        lo = int(start[j0])
+        q = p[lo:lo + size * cnt].reshape(cnt, size, 2)
+        m = gm[j0:j0 + cnt]
+        mk = np.maximum(m, 0)
+        out = np.full((cnt, size), np.inf)
+        line, arc = (m >= 0) & ~g["arc"][mk], (m >= 0) & g["arc"][mk]
+        if line.any():
+            a, ab, L2 = g["a"][mk][:, None, :], g["ab"][mk], g["L2"][mk][:, None]
+            diff = q - a
+            v = np.where((line & (L2[:, 0] != 0))[:, None], ab, 0.0)
+            dot = (diff @ v[:, :, None])[:, :, 0]
+            with np.errstate(divide="ignore", invalid="ignore"):
+                t = np.where(L2 == 0, 0.0, np.clip(dot / L2, 0.0, 1.0))
+            dl = np.linalg.norm(q - (a + t[:, :, None] * ab[:, None, :]), axis=2)
+            out[line] = dl[line]
+        if arc.any():
+            ma = mk[arc]
+            c, a, b = g["c"][ma][:, None, :], g["a"][ma][:, None, :], g["b"][ma][:, None, :]
+            a0, sweep, r = g["a0"][ma][:, None], g["sweep"][ma][:, None], g["r"][ma][:, None]
+            qa = q[arc]
+            ang = _ang(qa - c)
+            rel = np.where(g["ccw"][ma][:, None], (ang - a0) % (2 * np.pi), (a0 - ang) % (2 * np.pi))
+            radial = np.abs(np.linalg.norm(qa - c, axis=2) - r)
+            ends = np.minimum(np.linalg.norm(qa - a, axis=2), np.linalg.norm(qa - b, axis=2))
+            out[arc] = np.where(rel <= sweep, radial, ends)
+        d[lo:lo + size * cnt] = out.reshape(-1)
+    return d
+
+
+BIG_GROUP = 128  # points: a move with more goes through move_dist alone, fewer are done together
 
 
 def path_dist_um(p_mm: np.ndarray, move_idx: np.ndarray, moves: list[Move], origin_mm: np.ndarray) -> np.ndarray:
     """Distance (um) of each point to its move or the moves before and after it."""
+    # the points grouped by move with one stable sort: each group is the same points, in the same
+    # order, as a mask per move would pick; a big group goes through move_dist per neighbour, the
+    # small ones (a job of many short moves) through _dist_to at once, with the same arithmetic
+    move_idx = np.asarray(move_idx, dtype=np.int64)
     d = np.full(len(p_mm), np.inf)
-    for m in np.unique(move_idx):
-        sel = move_idx == m
+    if not len(p_mm):
+        return d * 1000.0
+    order = np.argsort(move_idx, kind="stable")
+    ms, first, counts = np.unique(move_idx[order], return_index=True, return_counts=True)
+    p = np.ascontiguousarray(p_mm[order], dtype=np.float64)
+    best = np.full(len(p), np.inf)
+    big = counts >= BIG_GROUP
+    geo = {}
+    for m, lo, n in zip(ms[big].tolist(), first[big].tolist(), counts[big].tolist()):
+        pts, b = p[lo:lo + n], np.full(n, np.inf)
         for k in (m - 1, m, m + 1):
             if 0 <= k < len(moves):
-                d[sel] = np.minimum(d[sel], move_dist(p_mm[sel], moves[k], origin_mm))
+                if k not in geo:
+                    geo[k] = _move_geo(moves[k], origin_mm)
+                fn, gk = geo[k]
+                b = np.minimum(b, fn(pts, gk))
+        best[lo:lo + n] = b
+    if (~big).any():
+        by = np.argsort(counts[~big], kind="stable")  # the small groups by size, each whole and in order
+        sm, sf, sn = ms[~big][by], first[~big][by], counts[~big][by]
+        rows = np.repeat(sf - (np.cumsum(sn) - sn), sn) + np.arange(sn.sum())
+        g = _geometry(moves, origin_mm)
+        valid = lambda m: np.where((m >= 0) & (m < len(moves)), m, -1)  # noqa: E731
+        q, b = p[rows], np.full(len(rows), np.inf)
+        for j in (-1, 0, 1):
+            b = np.minimum(b, _dist_to(q, g, sn, valid(sm + j)))
+        best[rows] = b
+    d[order] = best
     return d * 1000.0
 
 

@@ -11,6 +11,7 @@ cycles per sample, flash and SRAM. Results: OUTDIR/job/<job>.json and <job>.png.
 from __future__ import annotations
 
 import json
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import numpy as np
@@ -53,28 +54,49 @@ def python_model(outdir: Path, lines: list, cfg: MachineConfig, source: str, lin
     return it.plan, seg, model_events(seg)
 
 
-def chip_run(outdir: Path, lines: list[str], cfg: MachineConfig, seconds: float, workdir: Path) -> dict:
-    """Export the library, build both sketches, run the self-test and the job on simavr."""
+def chip_build(outdir: Path, cfg: MachineConfig, workdir: Path, mcu: str = "atmega328p") -> dict:
+    """Export the library, build both sketches (the core once per OUTDIR and MCU), run the
+    self-test on simavr."""
     from nnik.firmware.arduino import export_arduino
     from nnik.firmware.gcode import chip
     from nnik.targets.toolchain import TargetError
 
     lib = export_arduino(outdir, workdir / "library", cfg)
     name = lib["name"]
+    core = workdir.parent / "core"
     try:
-        selftest = chip.build_sketch(Path(lib["dir"]), f"{name}_selftest", workdir / "build")
+        selftest = chip.build_sketch(Path(lib["dir"]), f"{name}_selftest", workdir / "build", mcu=mcu, core_dir=core)
         st = chip.run_firmware(selftest, [], workdir / "build", 5.0)
-        fw = chip.build_sketch(Path(lib["dir"]), f"{name}_gcode", workdir / "build", chip.file_run_defines(cfg))
-        run = chip.run_firmware(fw, lines, workdir / "build", 2.0 + 1.5 * seconds)
+        fw = chip.build_sketch(Path(lib["dir"]), f"{name}_gcode", workdir / "build", chip.file_run_defines(cfg),
+                               mcu=mcu, core_dir=core)
     except TargetError as exc:
         raise NnikError(f"avr: {exc}") from None
     st_line = next((t for _, t in st.replies if t.startswith(("PASS", "FAIL"))), "no answer")
-    return {"selftest": st_line, "selftest_pass": st_line.startswith("PASS"),
+    return {"fw": fw, "selftest": st_line, "workdir": workdir}
+
+
+def chip_job(built: dict, lines: list[str], cfg: MachineConfig, seconds: float, progress=None) -> dict:
+    """The job on the built firmware (chip_build) on simavr: replies, events, times."""
+    from nnik.firmware.gcode import chip
+    from nnik.targets.toolchain import TargetError
+
+    fw = built["fw"]
+    try:
+        run = chip.run_firmware(fw, lines, built["workdir"] / "build", 2.0 + 1.5 * seconds, progress=progress)
+    except TargetError as exc:
+        raise NnikError(f"avr: {exc}") from None
+    return {"selftest": built["selftest"], "selftest_pass": built["selftest"].startswith("PASS"),
             "flash_bytes": fw.flash_bytes, "ram_bytes": fw.ram_bytes, "state": run.state,
             "replies": [t for _, t in run.replies if not t.startswith(("nnik ", "Grbl ")) and t], "run": run,
             "events": chip_events(run.steps, run.marks, CLOCK_HZ // cfg.tick_hz),
             "tool_events": chip_tool_events(run.tool, run.marks, CLOCK_HZ // cfg.tick_hz),
             "segments_started": int(len(run.marks)), "end_cycle": run.end_cycle, **motion_times(run)}
+
+
+def chip_run(outdir: Path, lines: list[str], cfg: MachineConfig, seconds: float, workdir: Path,
+             mcu: str = "atmega328p", progress=None) -> dict:
+    """Export the library, build both sketches, run the self-test and the job on simavr."""
+    return chip_job(chip_build(outdir, cfg, workdir, mcu), lines, cfg, seconds, progress)
 
 
 def cpu_report(run, busy: np.ndarray, samples: int) -> dict:
@@ -104,14 +126,15 @@ def motion_times(run) -> dict:
 
 def write_step_counts(path: Path, steps: np.ndarray, start: np.ndarray) -> Path:
     """Each motor's count over time as the chip's pins show it: cycle, motor, dir, count after."""
-    counts = np.zeros((len(steps), 2), np.int64)
+    steps = np.asarray(steps, dtype=np.int64).reshape(-1, 3)
+    count = np.zeros(len(steps), np.int64)
     sign = np.where(steps[:, 2] == 1, 1, -1)
     for m in range(2):
         sel = steps[:, 1] == m
-        counts[sel, m] = start[m] + np.cumsum(sign[sel])
+        count[sel] = start[m] + np.cumsum(sign[sel])
     path.parent.mkdir(parents=True, exist_ok=True)
-    rows = [f"{c},{m},{d},{counts[i, m]}" for i, (c, m, d) in enumerate(steps.tolist())]
-    path.write_text("cycle,motor,dir,count\n" + "".join(r + "\n" for r in rows))
+    rows = np.column_stack([steps, count])
+    path.write_text("cycle,motor,dir,count\n" + ("%d,%d,%d,%d\n" * len(rows)) % tuple(rows.ravel().tolist()))
     return path
 
 
@@ -149,8 +172,10 @@ def machine_for(scn, shaper: str | None, seg_um: int | None) -> MachineConfig:
 
 def run_job(outdir: Path, job_path: Path, seg_um: int | None = None, use_chip: bool | None = None,
             shaper: str | None = None, precompensate: bool = False, opts: JobOptions | None = None,
-            check: bool = False) -> dict:
-    """Run a job; use_chip None: on the simulated chip when the toolchain is there; shaper:
+            check: bool = False, mcu: str = "atmega328p") -> dict:
+    """Run a job; use_chip None: on the simulated chip when the toolchain is there (mcu: the Uno's
+    atmega328p or the Mega's atmega2560; the sketches are built while the Python model runs, and
+    the job runs on simavr while the plot is drawn); shaper:
     none|zv|mzv|zvd|ei|auto overrides the scenario's [motion] shaper; precompensate: run the
     job rewritten offline for the belts (nnik.firmware.gcode.compensation); opts: flavour, tool,
     tool rule and the job's frame (--fit, --scale, --offset); check: parse and plan only (grbl's
@@ -189,51 +214,76 @@ def run_job(outdir: Path, job_path: Path, seg_um: int | None = None, use_chip: b
         except ValueError as exc:
             raise NnikError(str(exc), str(job_path)) from None
     stages.update(1)
-    stages.set_postfix_str("Python model of the firmware")
-    plan, seg, events = python_model(outdir, lines, cfg, str(job_path), prep.line_of if not precompensate else None)
-    stages.update(1)
-    res = {"scenario": scn.name, "job": job_path.name, "unit": scn.unit, "gcode": prep.summary,
-           "machine": {"origin_um": list(cfg.origin_um), "seg_um": cfg.seg_um, "tick_hz": cfg.tick_hz,
-                       "sample_hz": cfg.sample_hz, "shaper": cfg.shaper,
-                       "tool": cfg.tool, "tool_defines": cfg.defines()},
-           "tool": tool_report(seg, cfg), "motion": motion_report(seg, cfg),
-           **contour_report(scn, cfg, plan, seg, events)}
-    if res["clamped"]:
-        raise NnikError(f"{res['clamped']} samples outside the IK's domain although the job fits the workspace: "
-                        "a bug, please report it", str(job_path))
-    plot = res.pop("plot")
-    if dyn_fig is not None:
-        chosen = dyn_fig["methods"][dyn_fig["chosen"]]
-        res["dynamics"] = dyn_fig
-        res["tip"] = {k: chosen[k] for k in ("contour_um", "dynamics_um", "ringing_um", "ringing_floor_um")}
     why = chip.tool_missing_reason()
-    if use_chip is False or (use_chip is None and why):
-        res["chip"] = {"not_run": "not asked" if use_chip is False else why}
-    else:
-        if why:
-            raise NnikError(f"avr: {why}")
-        stages.set_postfix_str(f"simulated Uno ({res['seconds']:.1f} s of motion)")
-        c = chip_run(outdir, lines, cfg, res["seconds"], outdir / JOB_DIR / "work" / job_path.stem)
-        ev = c.pop("events")
-        tev, want_tev = c.pop("tool_events"), model_tool_events(seg)
-        run = c.pop("run")
-        c["steps_csv"] = str(write_step_counts(outdir / JOB_DIR / f"{job_path.stem}_chip_steps.csv", run.steps, seg.steps[0]))
-        same = (c["segments_started"] == res["segments"] and ev.shape == events.shape
-                and bool((ev == events).all()))
-        busy = (run.busy[:, 1] - run.busy[:, 0]).astype(np.float64)
-        c.update({"steps": int(len(ev)), "steps_equal": same, "replies_equal": c["replies"] == plan.replies,
-                  "tool_changes": int(len(tev)),
-                  "tool_equal": tev.shape == want_tev.shape and bool((tev == want_tev).all())})
-        if len(busy) and res["segments"]:
-            c.update(cpu_report(run, busy, res["motion"]["samples"]))
-        res["chip"] = c
-    stages.update(1)
-    stages.set_postfix_str("plot")
-    title = (f"{scn.name}: {job_path.name}, {res['motion']['job_s']:.2f} s ({cfg.sample_hz} Hz samples, shaper "
-             f"{cfg.shaper}); contour error max "
-             f"{res['contour_um']['max']:.1f} µm, RMS {res['contour_um']['rms']:.1f} µm")
-    res["png"] = str(job_png(out / f"{job_path.stem}.png", title, plan, cfg, plot, seg))
+    use = not (use_chip is False or (use_chip is None and why))
+    if use and why:
+        raise NnikError(f"avr: {why}")
+    pool = ThreadPoolExecutor(max_workers=1) if use else None  # the chip's builds beside the model
+    try:
+        work = outdir / JOB_DIR / "work" / job_path.stem
+        built = pool.submit(chip_build, outdir, cfg, work, mcu) if use else None
+        stages.set_postfix_str("Python model of the firmware")
+        plan, seg, events = python_model(outdir, lines, cfg, str(job_path),
+                                         prep.line_of if not precompensate else None)
+        stages.update(1)
+        res = {"scenario": scn.name, "job": job_path.name, "unit": scn.unit, "gcode": prep.summary,
+               "machine": {"origin_um": list(cfg.origin_um), "seg_um": cfg.seg_um, "tick_hz": cfg.tick_hz,
+                           "sample_hz": cfg.sample_hz, "shaper": cfg.shaper,
+                           "tool": cfg.tool, "tool_defines": cfg.defines()},
+               "tool": tool_report(seg, cfg), "motion": motion_report(seg, cfg),
+               **contour_report(scn, cfg, plan, seg, events)}
+        if res["clamped"]:
+            raise NnikError(f"{res['clamped']} samples outside the IK's domain although the job fits the workspace: "
+                            "a bug, please report it", str(job_path))
+        plot = res.pop("plot")
+        if dyn_fig is not None:
+            chosen = dyn_fig["methods"][dyn_fig["chosen"]]
+            res["dynamics"] = dyn_fig
+            res["tip"] = {k: chosen[k] for k in ("contour_um", "dynamics_um", "ringing_um", "ringing_floor_um")}
+        if not use:
+            res["chip"] = {"not_run": "not asked" if use_chip is False else why}
+        else:
+            stages.set_postfix_str(f"simulated {'Mega' if mcu == 'atmega2560' else 'Uno'} "
+                                   f"({res['seconds']:.1f} s of motion)")
+            sim = bar(total=round(res["seconds"], 1), desc="chip", unit="s", leave=False, position=1,
+                      bar_format="{l_bar}{bar}| {n:.1f}/{total:.1f} s simulated [{elapsed}<{remaining}]")
+
+            def progress(_answers: int, cycle: int) -> None:
+                sim.update(max(0.0, min(cycle / CLOCK_HZ, res["seconds"]) - sim.n))
+
+            ran = pool.submit(lambda: chip_job(built.result(), lines, cfg, res["seconds"], progress))
+        stages.set_postfix_str("plot")
+        title = (f"{scn.name}: {job_path.name}, {res['motion']['job_s']:.2f} s ({cfg.sample_hz} Hz samples, shaper "
+                 f"{cfg.shaper}); contour error max "
+                 f"{res['contour_um']['max']:.1f} µm, RMS {res['contour_um']['rms']:.1f} µm")
+        res["png"] = str(job_png(out / f"{job_path.stem}.png", title, plan, cfg, plot, seg))
+        stages.update(1)
+        if use:
+            c = ran.result()
+            sim.close()
+            res["chip"] = compare_chip(c, res, plan, seg, events, out, job_path.stem)
+        stages.update(1)
+    finally:
+        if pool is not None:
+            pool.shutdown(wait=True, cancel_futures=True)
+    res["png"] = res.pop("png")  # the key order of the JSON before the chip ran beside the plot
     write_file_atomic(out / f"{job_path.stem}.json", json.dumps(res, indent=2) + "\n")
-    stages.update(1)
     stages.close()
     return res
+
+
+def compare_chip(c: dict, res: dict, plan, seg, events, out: Path, stem: str) -> dict:
+    """The chip's run against the model: steps, replies, tool changes; the sample loop's CPU."""
+    ev = c.pop("events")
+    tev, want_tev = c.pop("tool_events"), model_tool_events(seg)
+    run = c.pop("run")
+    c["steps_csv"] = str(write_step_counts(out / f"{stem}_chip_steps.csv", run.steps, seg.steps[0]))
+    same = (c["segments_started"] == res["segments"] and ev.shape == events.shape
+            and bool((ev == events).all()))
+    busy = (run.busy[:, 1] - run.busy[:, 0]).astype(np.float64)
+    c.update({"steps": int(len(ev)), "steps_equal": same, "replies_equal": c["replies"] == plan.replies,
+              "tool_changes": int(len(tev)),
+              "tool_equal": tev.shape == want_tev.shape and bool((tev == want_tev).all())})
+    if len(busy) and res["segments"]:
+        c.update(cpu_report(run, busy, res["motion"]["samples"]))
+    return c

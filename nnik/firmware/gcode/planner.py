@@ -201,7 +201,20 @@ class Stream:
 
 
 def run_ops(ops: list[tuple], cfg: MachineConfig) -> Stream:
-    """ops: ("push", x, y, feed, tool, index), ("flush",), ("rest", ticks, tool)."""
+    """ops: ("push", x, y, feed, tool, index), ("flush",), ("rest", ticks, tool).  The stream
+    as nnik_gcode.c makes it: Planner.sample and Shaper.step rule for rule, run in bulk by
+    nnik.firmware.gcode.sampler (run_ops_reference is the sample-by-sample loop)."""
+    from nnik.firmware.gcode.sampler import run_arrays
+
+    a = run_arrays(ops, cfg)
+    pairs = lambda m: list(zip(m[:, 0].tolist(), m[:, 1].tolist()))  # noqa: E731
+    return Stream(a.kind.tolist(), pairs(a.planned), pairs(a.shaped), a.speed.tolist(), a.vn.tolist(),
+                  a.tool.tolist(), a.rest_ticks.tolist(), a.block.tolist())
+
+
+def run_ops_reference(ops: list[tuple], cfg: MachineConfig) -> Stream:
+    """run_ops one sample at a time through Planner.sample and Shaper.step (the definition the
+    bulk sampler is checked against)."""
     pl, sh, st = Planner(cfg), Shaper(cfg), Stream()
     settle, tail_tool = 0, 0
 

@@ -1,0 +1,44 @@
+"""The bulk sampler (nnik/firmware/gcode/sampler.py, behind planner.run_ops) against the
+sample-by-sample definition (planner.run_ops_reference: Planner.sample and Shaper.step): the same
+stream, field for field, on random jobs with lines, arcs, dwells, tool changes and M400, with and
+without a shaper."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from nnik.firmware.config import MachineConfig, shaper_taps
+from nnik.firmware.gcode.motion import interpret
+from nnik.firmware.gcode.planner import run_ops, run_ops_reference
+
+BASE = MachineConfig(origin_um=(0, 0))
+TAPS = {"f_hz": (40.0, 25.0), "zeta": (0.1, 0.05)}
+FIELDS = ("kind", "planned", "shaped", "speed", "vn", "tool", "rest_ticks", "block")
+
+
+def cfg_for(shaper: str, sample_hz: int) -> MachineConfig:
+    cfg = replace(BASE, sample_hz=sample_hz)
+    if shaper == "none":
+        return cfg
+    return replace(cfg, shaper=shaper, shaper_taps=shaper_taps(shaper, TAPS, sample_hz))
+
+
+line = st.tuples(st.integers(-30000, 30000), st.integers(-30000, 30000), st.integers(300, 9000))
+word = st.one_of(line.map(lambda t: f"G1 X{t[0] / 1000:.3f} Y{t[1] / 1000:.3f} F{t[2]}"),
+                 line.map(lambda t: f"G0 X{t[0] / 1000:.3f} Y{t[1] / 1000:.3f}"),
+                 st.sampled_from(["G4 P0.05", "M400", "M3 S500", "M4 S300", "M5", "G2 I2 J0", "G3 I0 J-1.5",
+                                  "G91 G1 X0.01", "G90"]))
+
+
+@settings(max_examples=60, deadline=None, database=None)
+@given(lines=st.lists(word, min_size=1, max_size=25), shaper=st.sampled_from(["none", "zv", "zvd", "ei"]),
+       sample_hz=st.sampled_from([1000, 500]))
+def test_the_bulk_sampler_is_the_sample_by_sample_one(lines, shaper, sample_hz):
+    cfg = cfg_for(shaper, sample_hz)
+    plan = interpret(["G21", "G90", *lines, "G1 X40 F6000", "G1 X-40"], cfg)
+    fast, ref = run_ops(plan.ops, cfg), run_ops_reference(plan.ops, cfg)
+    for f in FIELDS:
+        assert getattr(fast, f) == [tuple(x) if isinstance(x, tuple) else x for x in getattr(ref, f)], f
