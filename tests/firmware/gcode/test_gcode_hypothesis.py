@@ -146,5 +146,5 @@ def test_random_pen_jobs_step_the_same_on_the_chip(corexy_run, tool_firmware, li
     from nnik.firmware.ik_oracle import load_scenario_of
 
     note("\n".join(lines))
-    cfg = replace(default_machine(load_scenario_of(corexy_run)), tool="servo", pen_z_um=250)
-    run_both(tool_firmware(cfg), lines)
+    cfg = replace(default_machine(load_scenario_of(corexy_run)), tool="servo", pen_z_um=250, bounds_um=None)
+    run_both(tool_firmware(cfg), lines)  # random jobs wander beyond the travel: soft limits off
