@@ -70,7 +70,12 @@ def chip_build(outdir: Path, cfg: MachineConfig, workdir: Path, mcu: str = "atme
         fw = chip.build_sketch(Path(lib["dir"]), f"{name}_gcode", workdir / "build", chip.file_run_defines(cfg),
                                mcu=mcu, core_dir=core)
     except TargetError as exc:
-        raise NnikError(f"avr: {exc}") from None
+        hint = ""
+        if "does not fit" in str(exc) or "ld returned" in str(exc):
+            opts = ", ".join(sorted(cfg.features)) or "none"
+            hint = (f"; this job's build carries the options {opts} (docs/gcode.md): "
+                    + ("run it with --mcu atmega2560, which carries everything" if mcu != "atmega2560" else "too big"))
+        raise NnikError(f"avr: {exc}{hint}") from None
     st_line = next((t for _, t in st.replies if t.startswith(("PASS", "FAIL"))), "no answer")
     return {"fw": fw, "selftest": st_line, "workdir": workdir}
 
