@@ -52,6 +52,20 @@ class Segments:
         return self.speed_q16 * self.sample_hz / 65536.0
 
 
+def isqrt_rows(d: np.ndarray) -> np.ndarray:
+    """floor(sqrt(x^2 + y^2)) of each row, exactly: in float64 with a correction while the squares
+    are below 2^52 (samples move a few hundred um), else integer by integer."""
+    if not len(d):
+        return np.zeros(0, np.int64)
+    if np.abs(d).max() >= 1 << 25:
+        return np.array([isqrt(int(a * a + b * b)) for a, b in d.tolist()], dtype=np.int64)
+    x = d[:, 0] * d[:, 0] + d[:, 1] * d[:, 1]
+    r = np.floor(np.sqrt(x.astype(np.float64))).astype(np.int64)
+    r -= (r * r > x).astype(np.int64)
+    r += ((r + 1) * (r + 1) <= x).astype(np.int64)
+    return r
+
+
 def _move_of_blocks(plan: Plan) -> np.ndarray:
     idx = np.full(len(plan.ends), -1, np.int64)
     for m, mv in enumerate(plan.moves):
@@ -79,7 +93,7 @@ def plan_steps(plan: Plan, cfg: MachineConfig, ik) -> Segments:
     clamped = np.where(samp, flags[k], 0)
     prev = np.concatenate([np.zeros((1, 2), np.int64), shaped[:-1]])
     dd = shaped - prev
-    chord = np.array([isqrt(int(a * a + b * b)) for a, b in dd.tolist()], dtype=np.int64)
+    chord = isqrt_rows(dd)
     bm = _move_of_blocks(plan)
     blk = np.asarray(st.block, dtype=np.int64)
     move = np.where(blk >= 0, bm[np.maximum(blk, 0)] if len(bm) else -1, -1)

@@ -121,3 +121,15 @@ def test_r_arcs_short_long_and_semicircle():
     assert quarter.center == (0, 0) and three_quarters.center == (0, 0)
     assert three_quarters.n_seg == 3 * quarter.n_seg
     assert half.center == (5000, 0) and half_at_tol.center == (5000, 0)  # 0.1 um short of 2R: within the tolerance
+
+
+@settings(max_examples=300, deadline=None, database=None)
+@given(rows=st.lists(st.tuples(st.integers(-(2**25) + 1, 2**25 - 1), st.integers(-(2**25) + 1, 2**25 - 1)),
+                     min_size=1, max_size=50), square=st.integers(0, 2**24))
+def test_row_square_roots_are_exact_floors(rows, square):
+    from math import isqrt
+
+    from nnik.firmware.gcode.motion import isqrt_rows
+
+    d = np.asarray(rows + [(square, 0), (square, 1), (-square, -1)], dtype=np.int64)
+    assert isqrt_rows(d).tolist() == [isqrt(int(a * a + b * b)) for a, b in d.tolist()]
