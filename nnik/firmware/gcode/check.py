@@ -7,7 +7,8 @@ import numpy as np
 
 from nnik.firmware.config import MachineConfig
 from nnik.firmware.gcode.interpreter import Interpreter
-from nnik.firmware.gcode.planner import duty_of, run_ops
+from nnik.firmware.gcode.planner import duty_of
+from nnik.firmware.gcode.sampler import run_ops
 
 
 def check_report(lines: list, cfg: MachineConfig) -> dict:

@@ -19,6 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
+from nnik.firmware.gcode.simrun import ChipRun  # noqa: F401  (chip.ChipRun, as before)
 from nnik.targets.toolchain import HARNESS_DIR, TargetError, find_tool, run
 
 CORE_ROOT = Path(os.environ.get("NNIK_ARDUINO_AVR", "/usr/share/arduino/hardware/arduino/avr"))
@@ -215,20 +216,6 @@ def build_pty_harness(workdir: Path) -> Path:
             "build the simavr pty harness", cwd=workdir)
         tmp.rename(exe)
     return exe
-
-
-@dataclass
-class ChipRun:
-    """What the simulated chip did: replies, step events, segment starts, busy windows."""
-
-    replies: list[tuple[int, str]]  # (cycle, text), the banner included
-    steps: np.ndarray  # (K, 3) int64: cycle, motor, dir (1: positive)
-    marks: np.ndarray  # (S,) cycles at which segments started
-    busy: np.ndarray  # (B, 2) cycles: rise, fall of the busy pin
-    end_cycle: int
-    state: str
-    idle_cycle: int = 0  # the motion pin's last fall before the drain answer: the true end; 0: no motion
-    tool: np.ndarray | None = None  # (T, 2) int64: cycle, duty of every change of the tool's PWM (D11)
 
 
 def parse_events(text: str) -> ChipRun:

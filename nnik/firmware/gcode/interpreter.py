@@ -14,13 +14,12 @@ from math import isqrt
 
 from nnik.firmware.config import SCALE_ONE, MachineConfig
 from nnik.firmware.gcode.codes import GcodeAlarm, GcodeLineError, describe
-from nnik.firmware.gcode.geometry import arc_points, bezier_points, chord_length, r_centre
+from nnik.firmware.gcode import curves
+from nnik.firmware.gcode.geometry import chord_length
 from nnik.firmware.gcode.parse import Block, parse_block
 from nnik.firmware.gcode.program import MIN_FEED, POS_LIMIT, TOOL_SCALED, Move, Plan
 from nnik.firmware.gcode.reader import DOLLAR, EMPTY, ERROR, read_line, sendable
 
-PLANES = ((0, 1), (2, 0), (1, 2))  # G17 XY, G18 ZX, G19 YZ: grbl's (axis_0, axis_1)
-OFFSET_LETTERS = "IJK"
 DWELL_MS_MAX = (1 << 24) - 1
 
 
@@ -274,11 +273,11 @@ class Interpreter:
         # arcs and curves: centre, radius, chord ends (checked before anything changes)
         geom = None
         if moving and motion in (2, 3):
-            geom = self._arc(v, tgt, plane, inch, arc_abs, wcs, tlo, motion == 3, used)
+            geom = curves.arc(self, v, tgt, plane, inch, arc_abs, wcs, tlo, motion == 3, used)
         elif moving and motion == 5:
             if plane:
                 raise GcodeLineError(20, "G5 outside G17")
-            geom = self._bezier(v, tgt, inch, used)
+            geom = curves.bezier(self, v, tgt, inch, used)
         unused = sorted(set(v) - used)
         if unused:
             raise GcodeLineError(36, " ".join(unused))
@@ -420,95 +419,6 @@ class Interpreter:
                 self._record(Move(self.line_no, "poly", self.xf(start), self.xf(tgt), first, n,
                                   points=tuple(self.xf_exact(q) for q in extra)))
         self.bezier_c2 = geom[3] if motion == 5 else None
-
-    # ---- geometry, checked before the line changes anything -----------------------------------
-    def _arc(self, v, tgt, plane: int, inch: bool, arc_abs: bool, wcs: int, tlo: int, ccw: bool, used: set):
-        a0, a1 = PLANES[plane]
-        lin = 3 - a0 - a1
-        names = "XYZ"
-        if names[a0] not in v and names[a1] not in v:
-            raise GcodeLineError(32)
-        if plane and tgt[lin] != self.mp[lin]:
-            raise GcodeLineError(20, "a helix outside G17")
-        x, y = tgt[a0] - self.mp[a0], tgt[a1] - self.mp[a1]
-        if "R" in v:
-            used.add("R")
-            rad = v["R"].to_um(inch)
-            if rad == 0:
-                raise GcodeLineError(33, "R0")
-            off = r_centre(x, y, rad, ccw)
-        else:
-            o0, o1 = OFFSET_LETTERS[a0], OFFSET_LETTERS[a1]
-            if o0 not in v and o1 not in v:
-                raise GcodeLineError(35)
-            used |= {o0, o1}
-            off = [v[o].to_um(inch) if o in v else 0 for o in (o0, o1)]
-            if arc_abs:
-                off = [off[0] + self.coord[wcs][a0] + self.g92[a0] + (tlo if a0 == 2 else 0) - self.mp[a0],
-                       off[1] + self.coord[wcs][a1] + self.g92[a1] + (tlo if a1 == 2 else 0) - self.mp[a1]]
-        c = (self.mp[a0] + off[0], self.mp[a1] + off[1])
-        if abs(c[0]) > POS_LIMIT or abs(c[1]) > POS_LIMIT:
-            raise GcodeLineError(33, "the centre is out of range")
-        cur = (self.mp[a0] - c[0], self.mp[a1] - c[1])
-        e = (tgt[a0] - c[0], tgt[a1] - c[1])
-        r = isqrt(cur[0] ** 2 + cur[1] ** 2)
-        if r == 0:
-            raise GcodeLineError(33, "radius zero")
-        re = isqrt(e[0] ** 2 + e[1] ** 2)
-        if re == 0 or abs(re - r) > 5 + r // 1000:
-            raise GcodeLineError(33, "the end is off the circle")
-        pts = arc_points(cur, e, r, ccw, self.cfg.seg_um)
-        out = []
-        for q in pts:
-            p = list(tgt)
-            p[a0], p[a1] = c[0] + q[0], c[1] + q[1]
-            out.append(tuple(p))
-        if plane == 0:
-            return "arc2d", out, (c, r, ccw)
-        return "arc3d", out, _projected_arc(self.mp, tgt, a0, a1, c, r, ccw)
-
-    def _bezier(self, v, tgt, inch: bool, used: set):
-        if "P" not in v or "Q" not in v:
-            raise GcodeLineError(28, "G5 needs P and Q")
-        used |= {"I", "J", "P", "Q"}
-        p0 = (self.mp[0], self.mp[1])
-        if "I" in v or "J" in v:
-            c1 = (p0[0] + (v["I"].to_um(inch) if "I" in v else 0), p0[1] + (v["J"].to_um(inch) if "J" in v else 0))
-        elif self.motion == 5 and self.bezier_c2 is not None:
-            c1 = (2 * p0[0] - self.bezier_c2[0], 2 * p0[1] - self.bezier_c2[1])
-        else:
-            raise GcodeLineError(28, "G5 needs I and J (no G5 before to continue)")
-        p3 = (tgt[0], tgt[1])
-        c2 = (p3[0] + v["P"].to_um(inch), p3[1] + v["Q"].to_um(inch))
-        if any(abs(q) > POS_LIMIT for q in (*c1, *c2)):
-            raise GcodeLineError(33, "a control point out of range")
-        pts = [(q[0], q[1], tgt[2]) for q in bezier_points(p0, c1, c2, p3, self.cfg.seg_um)]
-        exact = [_bez(p0, c1, c2, p3, k / 64) for k in range(65)]
-        return "curve", pts, exact, c2
-
-
-def _bez(p0, p1, p2, p3, t: float) -> tuple[float, float]:
-    u = 1 - t
-    return tuple(u ** 3 * p0[a] + 3 * u * u * t * p1[a] + 3 * u * t * t * p2[a] + t ** 3 * p3[a] for a in range(2))
-
-
-def _projected_arc(mp, tgt, a0, a1, c, r, ccw) -> list[tuple[float, float]]:
-    """The exact XY path of an arc in G18/G19 (a line in XY, traced back and forth)."""
-    from math import atan2, cos, pi, sin
-
-    t0 = atan2(mp[a1] - c[1], mp[a0] - c[0])
-    t1 = atan2(tgt[a1] - c[1], tgt[a0] - c[0])
-    sweep = (t1 - t0) % (2 * pi) if ccw else -((t0 - t1) % (2 * pi))
-    if sweep == 0:
-        sweep = 2 * pi if ccw else -2 * pi
-    out = []
-    for k in range(129):
-        t = t0 + sweep * k / 128
-        p = list(map(float, mp))
-        p[a0], p[a1] = c[0] + r * cos(t), c[1] + r * sin(t)
-        out.append((p[0], p[1]))
-    return out
-
 
 def run_lines(lines, cfg: MachineConfig) -> Interpreter:
     it = Interpreter(cfg)

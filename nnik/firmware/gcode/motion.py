@@ -2,7 +2,7 @@
 
 The interpreter turns lines into planner operations: a block per line or arc chord (machine
 micrometres less the work origin), a flush (M400, M2, M30 and the end of the job) and rests
-(G4, a tool change without motion: the planner first runs out to rest). planner.run_ops plays
+(G4, a tool change without motion: the planner first runs out to rest). sampler.run_ops plays
 them through the planner, the fixed-rate sampler and the shaper as the chip does; the IK then
 runs on all shaped samples at once (it does not feed back into the motion), and each sample
 becomes a stepper segment of tick_hz / sample_hz ticks (more if a motor needs more steps: an
@@ -75,7 +75,8 @@ def _move_of_blocks(plan: Plan) -> np.ndarray:
 
 def plan_steps(plan: Plan, cfg: MachineConfig, ik) -> Segments:
     """Steps and ticks of every segment: ik(in_um (N, 2) int64) -> (out (N, 2), flags (N,))."""
-    from nnik.firmware.gcode.planner import duty_of, run_ops
+    from nnik.firmware.gcode.planner import duty_of
+    from nnik.firmware.gcode.sampler import run_ops
 
     st = run_ops(plan.ops, cfg)
     origin = np.asarray(cfg.origin_um, dtype=np.int64)

@@ -9,7 +9,7 @@ codegen/arduino/src/nnik_plan.c (its header states every rule and rounding; in s
 * determinism: samples are taken only while the queue is full (until the head block is left
   behind) or flushed (until it is empty), so they depend on the block order alone.
 
-``run_ops`` plays the interpreter's operations (push, flush, rest) through the planner, the shaper
+``run_ops_reference`` (and nnik.firmware.gcode.sampler.run_ops, in bulk) plays the interpreter's operations (push, flush, rest) through the planner, the shaper
 and the sample clock the way nnik_gcode.c does, and returns the stream of stepper segments before
 the IK (one per sample, plus the rest segments).
 """
@@ -198,18 +198,6 @@ class Stream:
     tool: list[int] = field(default_factory=list)  # tool word (samples) or fixed duty word (rests)
     rest_ticks: list[int] = field(default_factory=list)  # 0 for samples
     block: list[int] = field(default_factory=list)  # push index of the sample's block (-1: rest)
-
-
-def run_ops(ops: list[tuple], cfg: MachineConfig) -> Stream:
-    """ops: ("push", x, y, feed, tool, index), ("flush",), ("rest", ticks, tool).  The stream
-    as nnik_gcode.c makes it: Planner.sample and Shaper.step rule for rule, run in bulk by
-    nnik.firmware.gcode.sampler (run_ops_reference is the sample-by-sample loop)."""
-    from nnik.firmware.gcode.sampler import run_arrays
-
-    a = run_arrays(ops, cfg)
-    pairs = lambda m: list(zip(m[:, 0].tolist(), m[:, 1].tolist()))  # noqa: E731
-    return Stream(a.kind.tolist(), pairs(a.planned), pairs(a.shaped), a.speed.tolist(), a.vn.tolist(),
-                  a.tool.tolist(), a.rest_ticks.tolist(), a.block.tolist())
 
 
 def run_ops_reference(ops: list[tuple], cfg: MachineConfig) -> Stream:

@@ -1,4 +1,4 @@
-"""planner.run_ops as arrays: the same planner, sampler and shaper, in fewer Python steps.
+"""The planner's operations as arrays (run_ops): the same planner, sampler and shaper, in fewer Python steps.
 
 What the chip does per sample (nnik_plan.c, planner.Planner.sample) is kept rule for rule; two
 things make it fast without changing a bit:
@@ -11,7 +11,7 @@ things make it fast without changing a bit:
   sampler, vectorised: shaped = p + ((16384 - sum A_i (p[n] - p[n - d_i])) >> 15), p before the
   first sample = the start (0, 0), as planner.Shaper.step.
 
-run_arrays(ops, cfg) -> Arrays; planner.run_ops turns them into its Stream of lists.
+run_arrays(ops, cfg) -> Arrays; run_ops turns them into planner's Stream of lists.
 """
 
 from __future__ import annotations
@@ -21,7 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from nnik.firmware.config import MachineConfig
-from nnik.firmware.gcode.planner import U32, Planner
+from nnik.firmware.gcode.planner import U32, Planner, Stream
 
 BULK_MIN = 8  # cruise runs at least this long go through numpy
 
@@ -165,7 +165,7 @@ def _shape(p: np.ndarray, cfg: MachineConfig) -> np.ndarray:
 
 
 def run_arrays(ops: list[tuple], cfg: MachineConfig) -> Arrays:
-    """ops as planner.run_ops takes them; the same stream, as arrays."""
+    """ops as run_ops takes them; the same stream, as arrays."""
     pl = Planner(cfg)
     X, Y, V, B = [], [], [], []
     special = []  # (row, kind, tool, ticks) of the shaper's tail samples and the rests
@@ -235,3 +235,13 @@ def _assemble(X, Y, V, B, special, vn_of, tool_of, cfg) -> Arrays:
         held[ok] = shaped[last[ok]]
         shaped[~samp] = held[~samp]
     return Arrays(kind, planned, shaped, np.asarray(V, dtype=np.int64), vn, tool, rest_ticks, block)
+
+
+def run_ops(ops: list[tuple], cfg: MachineConfig) -> Stream:
+    """ops: ("push", x, y, feed, tool, index), ("flush",), ("rest", ticks, tool).  The stream
+    as nnik_gcode.c makes it: Planner.sample and Shaper.step rule for rule, run in bulk here
+    (planner.run_ops_reference is the sample-by-sample loop)."""
+    a = run_arrays(ops, cfg)
+    pairs = lambda m: list(zip(m[:, 0].tolist(), m[:, 1].tolist()))  # noqa: E731
+    return Stream(a.kind.tolist(), pairs(a.planned), pairs(a.shaped), a.speed.tolist(), a.vn.tolist(),
+                  a.tool.tolist(), a.rest_ticks.tolist(), a.block.tolist())

@@ -9,6 +9,7 @@ there, with an ETA on a terminal (nnik.progress).
 from __future__ import annotations
 
 import subprocess
+from dataclasses import dataclass
 import threading
 from pathlib import Path
 from typing import Callable
@@ -16,6 +17,20 @@ from typing import Callable
 import numpy as np
 
 from nnik.targets.toolchain import TargetError, first_error_line
+
+
+@dataclass
+class ChipRun:
+    """What the simulated chip did: replies, step events, segment starts, busy windows."""
+
+    replies: list[tuple[int, str]]  # (cycle, text), the banner included
+    steps: np.ndarray  # (K, 3) int64: cycle, motor, dir (1: positive)
+    marks: np.ndarray  # (S,) cycles at which segments started
+    busy: np.ndarray  # (B, 2) cycles: rise, fall of the busy pin
+    end_cycle: int
+    state: str
+    idle_cycle: int = 0  # the motion pin's last fall before the drain answer: the true end; 0: no motion
+    tool: np.ndarray | None = None  # (T, 2) int64: cycle, duty of every change of the tool's PWM (D11)
 
 EVENT = np.dtype([("cycle", "<u8"), ("tag", "<u4"), ("value", "<i4")])  # struct event in the harness
 
@@ -47,8 +62,6 @@ def run_harness(exe: Path, elf: Path, lines: list[str], workdir: Path, max_secon
     """Send lines to the firmware (then M400) on simavr; progress(answers so far, its cycle) after
     each answer.
     Returns chip.ChipRun; a harness that fails, or runs past its wall-clock bound, -> TargetError."""
-    from nnik.firmware.gcode.chip import ChipRun
-
     job = workdir / "job_lines.txt"
     job.write_bytes("".join(f"{ln}\n" for ln in lines).encode("latin-1"))
     events = workdir / "job_events.bin"

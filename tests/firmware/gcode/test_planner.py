@@ -13,7 +13,7 @@ from hypothesis import strategies as st
 
 from nnik.firmware.config import MachineConfig
 from nnik.firmware.gcode.motion import interpret
-from nnik.firmware.gcode.planner import run_ops
+from nnik.firmware.gcode.sampler import run_ops
 
 CFG = MachineConfig(origin_um=(0, 0))  # 1000 mm/s^2 = 1 um/sample^2 = 65536 Q16; 3000 mm/min = 50 um/sample
 

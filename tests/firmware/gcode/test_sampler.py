@@ -1,4 +1,4 @@
-"""The bulk sampler (nnik/firmware/gcode/sampler.py, behind planner.run_ops) against the
+"""The bulk sampler (nnik/firmware/gcode/sampler.py, run_ops) against the
 sample-by-sample definition (planner.run_ops_reference: Planner.sample and Shaper.step): the same
 stream, field for field, on random jobs with lines, arcs, dwells, tool changes and M400, with and
 without a shaper."""
@@ -12,7 +12,8 @@ from hypothesis import strategies as st
 
 from nnik.firmware.config import MachineConfig, shaper_taps
 from nnik.firmware.gcode.motion import interpret
-from nnik.firmware.gcode.planner import run_ops, run_ops_reference
+from nnik.firmware.gcode.planner import run_ops_reference
+from nnik.firmware.gcode.sampler import run_ops
 
 BASE = MachineConfig(origin_um=(0, 0))
 TAPS = {"f_hz": (40.0, 25.0), "zeta": (0.1, 0.05)}

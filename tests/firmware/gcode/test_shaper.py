@@ -13,7 +13,8 @@ from hypothesis import strategies as st
 
 from nnik.firmware.config import MachineConfig, shaper_taps
 from nnik.firmware.gcode.motion import interpret
-from nnik.firmware.gcode.planner import Shaper, run_ops
+from nnik.firmware.gcode.planner import Shaper
+from nnik.firmware.gcode.sampler import run_ops
 
 KINDS = ("zv", "mzv", "zvd", "ei")
 BELT = {"f_hz": (40.0, 35.0), "zeta": (0.1, 0.05)}
