@@ -27,7 +27,7 @@ def job_row(r: dict) -> tuple[str, ...]:
         cpu = c.get("cpu_sample_loop")
         chip = (f"{c['steps']} {same}", f"{cps['mean']:.0f} (longest stretch {cps['max']})" if cps else "-",
                 f"{100 * cpu:.1f} %" if cpu is not None else "-",
-                f"{c['flash_bytes']} / {c['ram_bytes']}",
+                f"{c['flash_bytes']} / {c['ram_bytes']}" + (f" + {c['stack_bytes']} stack" if c.get("stack_bytes") else ""),
                 f"{c['tool_changes']} {'equal' if c['tool_equal'] else 'DIFFER'}" if "tool_equal" in c else "-")
     m = r.get("motion") or {}
     motion = (f"{m['job_s']:.3f}", f"{m['peak_step_rate_hz']:.0f} / {m['step_rate_limit_hz']}"

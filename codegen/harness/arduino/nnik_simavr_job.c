@@ -14,6 +14,7 @@
  *   T <cycle> <duty>        the tool's PWM (Timer2's OCR2A, as simavr's timer reports it in
  *                           fast PWM mode; OC2A is D11 = PB3 on the Uno, D10 = PB4 on the Mega)
  *                           changed
+ *   K <sp_low> <ramend>      the lowest stack pointer after start-up, and the RAM's last address
  *   E <cycle> <state> <replies>   the end (state: "done", "halted", "timeout", "crashed")
  *
  * The sketch drives raw PORTD/PORTB bits, the same port bits on both chips.
@@ -70,6 +71,7 @@ static char out_line[256];
 static size_t out_len;
 static unsigned long long idle_fall; /* the motion pin's last falling edge */
 static int duty_seen;                /* the tool's last duty (0 at reset) */
+static unsigned sp_low = 0xffff; /* the lowest stack pointer seen */
 
 static void flush_events(void)
 {
@@ -286,6 +288,11 @@ int main(int argc, char **argv)
 
     for (;;) {
         rc = avr_run(avr);
+        {   /* the stack's low-water mark: the lowest stack pointer after start-up */
+            unsigned sp = avr->data[R_SPL] | ((unsigned)avr->data[R_SPH] << 8);
+            if (sp && sp < sp_low && avr->cycle > 10000)
+                sp_low = sp;
+        }
         if (rc == cpu_Done || rc == cpu_Crashed) {
             state = rc == cpu_Done ? "halted" : "crashed";
             break;
@@ -306,6 +313,7 @@ int main(int argc, char **argv)
             return 2;
         }
     }
+    printf("K %u %u\n", sp_low, (unsigned)avr->ramend);
     printf("E %llu %s %d\n", (unsigned long long)avr->cycle, state, n_replies);
     return 0;
 }

@@ -77,7 +77,7 @@ def chip_build(outdir: Path, cfg: MachineConfig, workdir: Path, mcu: str = "atme
                     + ("run it with --mcu atmega2560, which carries everything" if mcu != "atmega2560" else "too big"))
         raise NnikError(f"avr: {exc}{hint}") from None
     st_line = next((t for _, t in st.replies if t.startswith(("PASS", "FAIL"))), "no answer")
-    return {"fw": fw, "selftest": st_line, "workdir": workdir}
+    return {"fw": fw, "selftest": st_line, "workdir": workdir, "mcu": mcu}
 
 
 def chip_job(built: dict, lines: list[str], cfg: MachineConfig, seconds: float, progress=None) -> dict:
@@ -90,8 +90,13 @@ def chip_job(built: dict, lines: list[str], cfg: MachineConfig, seconds: float, 
         run = chip.run_firmware(fw, lines, built["workdir"] / "build", 2.0 + 1.5 * seconds, progress=progress)
     except TargetError as exc:
         raise NnikError(f"avr: {exc}") from None
+    ram = chip.MCUS[built.get("mcu", chip.MCU)].ram_bytes
+    if fw.ram_bytes + run.stack_bytes > ram:  # the stack ran into the static data: the run is not to be trusted
+        raise NnikError(f"avr: the stack ({run.stack_bytes} B deep) ran into the static RAM ({fw.ram_bytes} B of "
+                        f"{ram} B): a firmware defect, please report it")
     return {"selftest": built["selftest"], "selftest_pass": built["selftest"].startswith("PASS"),
-            "flash_bytes": fw.flash_bytes, "ram_bytes": fw.ram_bytes, "state": run.state,
+            "flash_bytes": fw.flash_bytes, "ram_bytes": fw.ram_bytes, "stack_bytes": run.stack_bytes,
+            "ram_free_bytes": ram - fw.ram_bytes - run.stack_bytes, "state": run.state,
             "replies": [t for _, t in run.replies if not t.startswith(("nnik ", "Grbl ")) and t], "run": run,
             "events": chip_events(run.steps, run.marks, CLOCK_HZ // cfg.tick_hz),
             "tool_events": chip_tool_events(run.tool, run.marks, CLOCK_HZ // cfg.tick_hz),

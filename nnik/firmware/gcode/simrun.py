@@ -31,6 +31,7 @@ class ChipRun:
     state: str
     idle_cycle: int = 0  # the motion pin's last fall before the drain answer: the true end; 0: no motion
     tool: np.ndarray | None = None  # (T, 2) int64: cycle, duty of every change of the tool's PWM (D11)
+    stack_bytes: int = 0  # the deepest stack seen: RAMEND less the lowest stack pointer
 
 EVENT = np.dtype([("cycle", "<u8"), ("tag", "<u4"), ("value", "<i4")])  # struct event in the harness
 
@@ -70,6 +71,7 @@ def run_harness(exe: Path, elf: Path, lines: list[str], workdir: Path, max_secon
     cmd = [str(exe), "-m", mcu, "-e", str(events), str(elf), str(job), f"{max_seconds:g}"]
     timeout = 120 + 60 * max_seconds
     replies, idle_cycle, end_cycle, state, answers = [], 0, 0, "missing", 0
+    sp_low = ramend = 0
     with open(err, "w") as ferr:
         try:
             proc = subprocess.Popen(cmd, cwd=workdir, stdout=subprocess.PIPE, stderr=ferr, stdin=subprocess.DEVNULL,
@@ -95,6 +97,8 @@ def run_harness(exe: Path, elf: Path, lines: list[str], workdir: Path, max_secon
                         progress(answers, int(cyc))
                 elif tag == "D":
                     idle_cycle = int(rest.partition(" ")[0])
+                elif tag == "K":
+                    sp_low, ramend = (int(v) for v in rest.split())
                 elif tag == "E":
                     parts = rest.split()
                     end_cycle, state = int(parts[0]), parts[1]
@@ -111,4 +115,5 @@ def run_harness(exe: Path, elf: Path, lines: list[str], workdir: Path, max_secon
     if state == "missing":
         raise TargetError("simavr job: the harness reported no end")
     steps, marks, busy, tool = read_events(events)
-    return ChipRun(replies, steps, marks, busy, end_cycle, state, idle_cycle, tool)
+    return ChipRun(replies, steps, marks, busy, end_cycle, state, idle_cycle, tool,
+                   ramend - sp_low if ramend and sp_low <= ramend else 0)

@@ -114,6 +114,7 @@ def run_both(entry, lines: list[str]):
     seg = plan_steps(plan, cfg, ik)
     res = chip.run_firmware(fw, lines, work, 2.0 + 1.5 * seg.ticks.sum() / cfg.tick_hz)
     assert res.state == "done"
+    assert 0 < res.stack_bytes and fw.ram_bytes + res.stack_bytes <= chip.RAM_BYTES  # the stack never met the data
     assert [t for _, t in res.replies if not t.startswith(("nnik ", "Grbl ")) and t] == plan.replies
     assert len(res.marks) == len(seg.ticks)
     tick = CLOCK_HZ // cfg.tick_hz
