@@ -249,7 +249,12 @@ NOINLINE static int8_t line_to(nnik_gc_t *g, const int32_t t[3], int32_t feed, u
 
 /* an arc's or a curve's chord ends, from exec's static state (pushed from exec's own frame: the
  * planner and the IK below a push need the stack) */
-static nnik_gc_chords_t chords;
+/* a line's words until its motion starts, then its chords: the two never live at once (RAM) */
+static union {
+    nnik_blk_t blk;
+    nnik_gc_chords_t chords;
+} scratch;
+#define chords (scratch.chords)
 static uint8_t ax0, ax1, per_point; /* the arc's plane axes; Z per chord end (G18/G19) */
 
 static void chords_start(nnik_gc_t *g, uint8_t motion, const int32_t c[2], const int32_t c1[2], const int32_t c2[2],
@@ -312,10 +317,10 @@ static const uint8_t PLANE_AXES[3][2] = {{0, 1}, {2, 0}, {1, 2}};
 
 int8_t nnik_gc_exec(nnik_gc_t *g)
 {
-    static nnik_blk_t b; /* static: a small stack frame is far smaller code on AVR (ldd reaches 63 B) */
+#define b (scratch.blk) /* static: a small stack frame is far smaller code on AVR (ldd reaches 63 B) */
     int8_t r;
     uint8_t inch, rel, plane, arc_abs, inverse, wcs, motion, nm, k, axes = 0, moving, axis_nm, extrude = 0;
-    uint8_t e_rel, e_move, seg_blocks;
+    uint8_t e_rel, e_move, seg_blocks, end_stop, end_wait, end_tool;
     uint16_t used = (1U << W_F) | (1U << W_T) | (1U << W_S);
     static int32_t u[W_COUNT];
     static int32_t tgt[3], c[2], c1[2], c2[2]; /* static: the stack under an arc's chord is deep */
@@ -591,6 +596,10 @@ int8_t nnik_gc_exec(nnik_gc_t *g)
         if (!r)
             r = line_to(g, dest, NNIK_GC_MAX_FEED_UM_MIN, 1, 0);
     }
+    /* what the end of the line needs from its words: the chords reuse their memory below */
+    end_stop = b.stop;
+    end_wait = b.wait;
+    end_tool = b.spindle != UNSET || HASW(W_S) || (axes & 4) || b.m300;
     if (!r && moving) {
         if (motion <= 1) {
             int32_t f = motion == 0 ? (int32_t)NNIK_GC_MAX_FEED_UM_MIN : g->feed;
@@ -645,7 +654,7 @@ int8_t nnik_gc_exec(nnik_gc_t *g)
         g->bez_ok = 0;
     }
     g->e = e_tgt;
-    if (b.stop == 2 || b.stop == 30) { /* program end as grbl: G1 G17 G90 G94 G54, M5 M9 */
+    if (end_stop == 2 || end_stop == 30) { /* program end as grbl: G1 G17 G90 G94 G54, M5 M9 */
         g->motion = 1;
         g->plane = 0;
         g->relative = 0;
@@ -655,13 +664,15 @@ int8_t nnik_gc_exec(nnik_gc_t *g)
         g->coolant = 0;
     }
     seg_blocks = g->blocks != blk0;
-    if ((b.spindle != UNSET || HASW(W_S) || (axes & 4) || b.stop == 2 || b.stop == 30 || b.m300) && !seg_blocks &&
+    if ((end_tool || end_stop == 2 || end_stop == 30) && !seg_blocks &&
         g->last_tool != idle_tool(g) && (NNIK_GC_TOOL == 1 || move_tool(g, 0, 0) == 0) && !g->check)
         rest(g, 1, idle_tool(g));
-    if (b.wait || b.stop == 0 || b.stop == 2 || b.stop == 30) {
+    if (end_wait || end_stop == 0 || end_stop == 2 || end_stop == 30) {
         if (!g->check)
             nnik_gc_flush(g);
-        return b.stop == 0 ? NNIK_GC_PAUSE : NNIK_GC_SYNC;
+        return end_stop == 0 ? NNIK_GC_PAUSE : NNIK_GC_SYNC;
     }
     return NNIK_GC_OK;
 }
+#undef b
+#undef chords
