@@ -184,19 +184,23 @@ def build_sketch(libdir: Path, example: str, workdir: Path, defines: dict | None
     return fw
 
 
-def build_harness(workdir: Path) -> Path:
-    """The simavr job runner, compiled for the host against libsimavr (cached by source hash)."""
+def _build_host_tool(src: Path, workdir: Path, libs: list[str], what: str) -> Path:
+    """A simavr runner compiled for the host against libsimavr (cached by source hash)."""
     _require()
     (workdir,) = _absolute(workdir)
-    digest = hashlib.sha256(HARNESS_SRC.read_bytes()).hexdigest()[:12]
-    exe = workdir / f"nnik_simavr_job-{digest}"
+    digest = hashlib.sha256(src.read_bytes()).hexdigest()[:12]
+    exe = workdir / f"{src.stem}-{digest}"
     if not exe.is_file():
         workdir.mkdir(parents=True, exist_ok=True)
         tmp = exe.with_suffix(".tmp")
-        run([find_tool("gcc"), "-O2", "-Wall", "-Wextra", "-Werror", HARNESS_SRC, "-o", tmp, "-lsimavr"],
-            "build the simavr harness", cwd=workdir)
+        run([find_tool("gcc"), "-O2", "-Wall", "-Wextra", "-Werror", src, "-o", tmp, *libs], what, cwd=workdir)
         tmp.rename(exe)
     return exe
+
+
+def build_harness(workdir: Path) -> Path:
+    """The simavr job runner."""
+    return _build_host_tool(HARNESS_SRC, workdir, ["-lsimavr"], "build the simavr harness")
 
 
 PTY_HARNESS_SRC = HARNESS_DIR / "arduino" / "nnik_simavr_pty.c"
@@ -204,18 +208,8 @@ PTY_HARNESS_SRC = HARNESS_DIR / "arduino" / "nnik_simavr_pty.c"
 
 def build_pty_harness(workdir: Path) -> Path:
     """The simavr runner that puts the chip's UART on a pseudo-terminal (for real senders;
-    nnik.firmware.gcode.pty_chip runs it), compiled against libsimavr (cached by source hash)."""
-    _require()
-    (workdir,) = _absolute(workdir)
-    digest = hashlib.sha256(PTY_HARNESS_SRC.read_bytes()).hexdigest()[:12]
-    exe = workdir / f"nnik_simavr_pty-{digest}"
-    if not exe.is_file():
-        workdir.mkdir(parents=True, exist_ok=True)
-        tmp = exe.with_suffix(".tmp")
-        run([find_tool("gcc"), "-O2", "-Wall", "-Wextra", "-Werror", PTY_HARNESS_SRC, "-o", tmp, "-lsimavr", "-lutil"],
-            "build the simavr pty harness", cwd=workdir)
-        tmp.rename(exe)
-    return exe
+    nnik.firmware.gcode.pty_chip runs it)."""
+    return _build_host_tool(PTY_HARNESS_SRC, workdir, ["-lsimavr", "-lutil"], "build the simavr pty harness")
 
 
 def parse_events(text: str) -> ChipRun:

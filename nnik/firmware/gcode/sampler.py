@@ -40,17 +40,7 @@ class Arrays:
     block: np.ndarray  # (S,)
 
 
-def _brakes(c: int, rem: int, ve: int, acc: int) -> bool:
-    """Planner._can_brake, inlined below where it is hot."""
-    if c <= ve:
-        return True
-    if rem <= c:
-        return False
-    d = (rem - c) >> 16
-    if d > U32 // (2 * acc):
-        return True
-    cq, eq = (c + 511) >> 9, ve >> 9
-    return 2 * acc * d >= 4 * (cq * cq - eq * eq)
+_brakes = Planner._can_brake  # the brake test, as the chip does it (inlined below where it is hot)
 
 
 def _cruise_len(c: int, rem: int, ve: int, acc: int, most: int) -> int:
