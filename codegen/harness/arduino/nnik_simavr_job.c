@@ -38,6 +38,7 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "nnik_simavr_wire.h"
 #include <simavr/sim_avr.h>
 #include <simavr/sim_elf.h>
 #include <simavr/sim_irq.h>
@@ -101,11 +102,6 @@ static void event(char tag, int value)
 }
 
 /* no host sleep while the firmware sleeps: simavr then skips the cycles to its next timer */
-static void no_sleep(avr_t *a, avr_cycle_count_t howlong)
-{
-    (void)a; (void)howlong;
-}
-
 static void pump(void)
 {
     while (!xoff && job_pos < line_end)
@@ -196,17 +192,10 @@ static void on_pwm(struct avr_irq_t *irq, uint32_t value, void *param)
     event('T', (int)value);
 }
 
-static void watch(char port, int bit, int code)
-{
-    avr_irq_t *irq = avr_io_getirq(avr, AVR_IOCTL_IOPORT_GETIRQ(port), bit);
-    avr_irq_register_notify(irq, on_pin, (void *)(intptr_t)code);
-}
-
 int main(int argc, char **argv)
 {
     elf_firmware_t fw;
     FILE *f;
-    uint32_t flags = 0;
     unsigned long long limit;
     const char *state = "done";
     int i, rc, opt;
@@ -264,27 +253,7 @@ int main(int argc, char **argv)
     avr_init(avr);
     avr->frequency = CLOCK_HZ;
     avr_load_firmware(avr, &fw);
-    avr->frequency = CLOCK_HZ;
-    avr->sleep = no_sleep;
-    /* INT0/INT1 share their pins with the STEP outputs (PD2, PD3; INT2/INT3 are PD2/PD3 on the
-     * Mega); the sketch never enables them, but simavr's strict low-level triggering polls such
-     * a pin every cycle while it is low (5x the whole run's time): off, they act as edge
-     * interrupts, which do nothing here with EIMSK = 0 */
-    for (i = 0; i < 8; i++)
-        avr_extint_set_strict_lvl_trig(avr, (uint8_t)i, 0);
-
-    /* no console echo of the UART, no host sleeps while the firmware polls it */
-    avr_ioctl(avr, AVR_IOCTL_UART_GET_FLAGS('0'), &flags);
-    flags &= ~(uint32_t)(AVR_UART_FLAG_STDIO | AVR_UART_FLAG_POLL_SLEEP);
-    avr_ioctl(avr, AVR_IOCTL_UART_SET_FLAGS('0'), &flags);
-    uart_in = avr_io_getirq(avr, AVR_IOCTL_UART_GETIRQ('0'), UART_IRQ_INPUT);
-    avr_irq_register_notify(avr_io_getirq(avr, AVR_IOCTL_UART_GETIRQ('0'), UART_IRQ_OUTPUT), on_uart, NULL);
-    avr_irq_register_notify(avr_io_getirq(avr, AVR_IOCTL_UART_GETIRQ('0'), UART_IRQ_OUT_XON), on_xon, NULL);
-    avr_irq_register_notify(avr_io_getirq(avr, AVR_IOCTL_UART_GETIRQ('0'), UART_IRQ_OUT_XOFF), on_xoff, NULL);
-    for (i = 2; i <= 7; i++)
-        watch('D', i, 8 + i);
-    watch('B', 0, 0);
-    avr_irq_register_notify(avr_io_getirq(avr, AVR_IOCTL_TIMER_GETIRQ('2'), TIMER_IRQ_OUT_PWM0), on_pwm, NULL);
+    uart_in = nnik_sim_wire(avr, CLOCK_HZ, on_uart, on_xon, on_xoff, on_pin, on_pwm);
 
     for (;;) {
         rc = avr_run(avr);

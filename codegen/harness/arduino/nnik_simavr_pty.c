@@ -37,6 +37,7 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "nnik_simavr_wire.h"
 #include <simavr/sim_avr.h>
 #include <simavr/sim_elf.h>
 #include <simavr/sim_irq.h>
@@ -150,17 +151,6 @@ static void on_pwm(struct avr_irq_t *irq, uint32_t value, void *param)
 
 /* the chip asleep: no host sleep (simavr's default sleeps the sleeping time away in real
  * time); the loop below paces simulated time instead */
-static void no_sleep(avr_t *a, avr_cycle_count_t how_long)
-{
-    (void)a; (void)how_long;
-}
-
-static void watch(char port, int bit, int code)
-{
-    avr_irq_t *irq = avr_io_getirq(avr, AVR_IOCTL_IOPORT_GETIRQ(port), bit);
-    avr_irq_register_notify(irq, on_pin, (void *)(intptr_t)code);
-}
-
 static double wall_now(void)
 {
     struct timespec ts;
@@ -196,8 +186,7 @@ int main(int argc, char **argv)
     double max_s = argc > 3 ? atof(argv[3]) : 0, speed = argc > 4 ? atof(argv[4]) : 1.0, t0;
     unsigned long long limit = max_s > 0 ? (unsigned long long)(max_s * CLOCK_HZ) : 0;
     const char *state = "stopped";
-    uint32_t flags = 0;
-    int slave, i, rc, watch_fd;
+    int slave, rc, watch_fd;
     double reset_at = -1;
     int started = 0;
 
@@ -246,23 +235,7 @@ int main(int argc, char **argv)
     avr_init(avr);
     avr->frequency = CLOCK_HZ;
     avr_load_firmware(avr, &fw);
-    avr->frequency = CLOCK_HZ;
-    avr->sleep = no_sleep;
-    /* INT0/INT1 are the STEP pins: simavr's strict low-level triggering would poll them on every
-     * cycle while low (the sketch never enables them); off, as in nnik_simavr_job.c */
-    for (i = 0; i < 8; i++)
-        avr_extint_set_strict_lvl_trig(avr, (uint8_t)i, 0);
-    avr_ioctl(avr, AVR_IOCTL_UART_GET_FLAGS('0'), &flags);
-    flags &= ~(uint32_t)(AVR_UART_FLAG_STDIO | AVR_UART_FLAG_POLL_SLEEP);
-    avr_ioctl(avr, AVR_IOCTL_UART_SET_FLAGS('0'), &flags);
-    uart_in = avr_io_getirq(avr, AVR_IOCTL_UART_GETIRQ('0'), UART_IRQ_INPUT);
-    avr_irq_register_notify(avr_io_getirq(avr, AVR_IOCTL_UART_GETIRQ('0'), UART_IRQ_OUTPUT), on_uart, NULL);
-    avr_irq_register_notify(avr_io_getirq(avr, AVR_IOCTL_UART_GETIRQ('0'), UART_IRQ_OUT_XON), on_xon, NULL);
-    avr_irq_register_notify(avr_io_getirq(avr, AVR_IOCTL_UART_GETIRQ('0'), UART_IRQ_OUT_XOFF), on_xoff, NULL);
-    for (i = 2; i <= 7; i++)
-        watch('D', i, 8 + i);
-    watch('B', 0, 0);
-    avr_irq_register_notify(avr_io_getirq(avr, AVR_IOCTL_TIMER_GETIRQ('2'), TIMER_IRQ_OUT_PWM0), on_pwm, NULL);
+    uart_in = nnik_sim_wire(avr, CLOCK_HZ, on_uart, on_xon, on_xoff, on_pin, on_pwm);
 
     printf("PTY %s\n", name);
     fflush(stdout);

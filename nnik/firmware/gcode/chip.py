@@ -188,8 +188,10 @@ def _build_host_tool(src: Path, workdir: Path, libs: list[str], what: str) -> Pa
     """A simavr runner compiled for the host against libsimavr (cached by source hash)."""
     _require()
     (workdir,) = _absolute(workdir)
-    digest = hashlib.sha256(src.read_bytes()).hexdigest()[:12]
-    exe = workdir / f"{src.stem}-{digest}"
+    h = hashlib.sha256(src.read_bytes())
+    for header in sorted(src.parent.glob("*.h")):  # the runners share nnik_simavr_wire.h
+        h.update(header.read_bytes())
+    exe = workdir / f"{src.stem}-{h.hexdigest()[:12]}"
     if not exe.is_file():
         workdir.mkdir(parents=True, exist_ok=True)
         tmp = exe.with_suffix(".tmp")
