@@ -10,12 +10,10 @@
 
 #define BEZIER_NMAX 1024
 
-static int32_t iabs32(int32_t v) { return v < 0 ? -v : v; }
-
 int8_t nnik_gc_r_centre(int32_t x, int32_t y, int32_t rad, uint8_t ccw, int32_t ij[2])
 {
     uint64_t d2 = nnik_sq2(x, y), d2s = d2, r2x4;
-    uint32_t ra = (uint32_t)iabs32(rad), s = 0, ds;
+    uint32_t ra = (uint32_t)nnik_iabs32(rad), s = 0, ds;
     int32_t xs = x, ys = y; /* (x, y) * 2^k: |.| <= d * 2^k < 2^30 */
     if (d2 == 0)
         return -33;

@@ -52,8 +52,6 @@
 #define NOINLINE
 #endif
 
-static int32_t iabs32(int32_t v) { return v < 0 ? -v : v; }
-
 void nnik_gc_read_reset(nnik_gc_t *g);
 
 void nnik_gc_init(nnik_gc_t *g, nnik_gc_emit_fn emit)
@@ -98,10 +96,10 @@ static void out_sample(nnik_gc_t *g, const int32_t p[2], uint16_t tool, uint32_t
         g->clamped++;
     d[0] = out[0] - g->steps[0];
     d[1] = out[1] - g->steps[1];
-    a = (uint32_t)iabs32(d[0]);
+    a = (uint32_t)nnik_iabs32(d[0]);
     if (ticks < a)
         ticks = a;
-    a = (uint32_t)iabs32(d[1]);
+    a = (uint32_t)nnik_iabs32(d[1]);
     if (ticks < a)
         ticks = a;
     if (ticks != SAMPLE_TICKS)
@@ -497,7 +495,7 @@ int8_t nnik_gc_exec(nnik_gc_t *g)
         }
         c[0] = g->mp[a0] + off[0];
         c[1] = g->mp[a1] + off[1];
-        if (iabs32(c[0]) > POS_LIMIT || iabs32(c[1]) > POS_LIMIT)
+        if (nnik_iabs32(c[0]) > POS_LIMIT || nnik_iabs32(c[1]) > POS_LIMIT)
             return -33;
         cur[0] = g->mp[a0] - c[0];
         cur[1] = g->mp[a1] - c[1];
@@ -530,8 +528,8 @@ int8_t nnik_gc_exec(nnik_gc_t *g)
         }
         c2[0] = tgt[0] + nnik_gc_um(V(W_P), inch);
         c2[1] = tgt[1] + u[W_Q];
-        if (iabs32(c1[0]) > POS_LIMIT || iabs32(c1[1]) > POS_LIMIT || iabs32(c2[0]) > POS_LIMIT ||
-            iabs32(c2[1]) > POS_LIMIT)
+        if (nnik_iabs32(c1[0]) > POS_LIMIT || nnik_iabs32(c1[1]) > POS_LIMIT || nnik_iabs32(c2[0]) > POS_LIMIT ||
+            nnik_iabs32(c2[1]) > POS_LIMIT)
             return -33;
 #endif
     }

@@ -11,6 +11,9 @@
 extern "C" {
 #endif
 
+/* |v| */
+static inline int32_t nnik_iabs32(int32_t v) { return v < 0 ? -v : v; }
+
 /* floor(sqrt(v)) */
 uint32_t nnik_isqrt32(uint32_t v);
 uint32_t nnik_isqrt64(uint64_t v);

@@ -37,8 +37,7 @@ def arc(it, v, tgt, plane: int, inch: bool, arc_abs: bool, wcs: int, tlo: int, c
         used |= {o0, o1}
         off = [v[o].to_um(inch) if o in v else 0 for o in (o0, o1)]
         if arc_abs:
-            off = [off[0] + it.coord[wcs][a0] + it.g92[a0] + (tlo if a0 == 2 else 0) - it.mp[a0],
-                   off[1] + it.coord[wcs][a1] + it.g92[a1] + (tlo if a1 == 2 else 0) - it.mp[a1]]
+            off = [off[0] + it.wco(a0, wcs, tlo) - it.mp[a0], off[1] + it.wco(a1, wcs, tlo) - it.mp[a1]]
     c = (it.mp[a0] + off[0], it.mp[a1] + off[1])
     if abs(c[0]) > POS_LIMIT or abs(c[1]) > POS_LIMIT:
         raise GcodeLineError(33, "the centre is out of range")

@@ -63,7 +63,7 @@ def mm(v: int) -> str:
     return f"{v / 1000:.3f}".rstrip("0").rstrip(".")
 
 
-def refusal(ext, bounds, origin_um) -> str:
+def refusal(ext, bounds) -> str:
     """One line: where the job goes, where the machine can go, and what would fit it."""
     (ex0, ey0), (ex1, ey1) = ext
     (bx0, by0), (bx1, by1) = bounds

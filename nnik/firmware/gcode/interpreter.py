@@ -88,9 +88,6 @@ class Interpreter:
         self.tool = self.last_tool = tool
 
     # ---- the tool -----------------------------------------------------------------------------
-    def _down_duty(self, down: bool) -> int:
-        return self.cfg.pen_duty(down)
-
     def idle_tool(self) -> int:
         """The tool word at rest: a laser is off (grbl's laser mode); a pen-like tool by its rule."""
         c = self.cfg
@@ -98,12 +95,12 @@ class Interpreter:
             return 0
         rule = c.tool_rule
         if rule == "z":
-            return self._down_duty(self.mp[2] - self.wco(2) <= c.pen_z_um)
+            return self.cfg.pen_duty(self.mp[2] - self.wco(2) <= c.pen_z_um)
         if rule == "s":
-            return self._down_duty(self.spindle != 0 and self.s > 0)
+            return self.cfg.pen_duty(self.spindle != 0 and self.s > 0)
         if rule == "m300":
-            return self._down_duty(self.pen)
-        return self._down_duty(False)
+            return self.cfg.pen_duty(self.pen)
+        return self.cfg.pen_duty(False)
 
     def move_tool(self, rapid: bool, extrude: bool = False) -> int:
         """The tool word of a move: a laser by S (off in rapids and with M5; M4 scaled by speed) or
@@ -111,7 +108,7 @@ class Interpreter:
         c = self.cfg
         rule = c.tool_rule
         if rule == "e":
-            return (255 if not c.pen_like else self._down_duty(True)) if extrude else c.tool_off_duty
+            return (255 if not c.pen_like else self.cfg.pen_duty(True)) if extrude else c.tool_off_duty
         if c.pen_like:
             return self.idle_tool()
         if rule != "s" or rapid or not self.spindle:
@@ -224,7 +221,7 @@ class Interpreter:
             elif rel:
                 tgt[k] = self.mp[k] + val
             else:
-                tgt[k] = val + self.coord[wcs][k] + self.g92[k] + (tlo if k == 2 else 0)
+                tgt[k] = val + self.wco(k, wcs, tlo)
             if abs(tgt[k]) > POS_LIMIT:
                 raise GcodeLineError(33, f"{a} beyond {POS_LIMIT // 1000} mm")
             used.add(a)
@@ -322,7 +319,7 @@ class Interpreter:
         elif nm in (28, 30):
             self._home(nm == 30, axes, tgt)
         if moving:
-            self._motion(motion, tgt, geom, extrude, inv_f, b)
+            self._motion(motion, tgt, geom, extrude, inv_f)
         self.e = e_tgt
         if b.stop in (2, 30):  # program end as grbl: G1 G17 G90 G94 G54, M5 M9
             self.motion, self.plane, self.relative, self.inverse, self.wcs = 1, 0, False, False, 0
@@ -364,7 +361,7 @@ class Interpreter:
             first = len(self.plan.ends)
             self._push(tgt, feed)
             self.mp[0], self.mp[1] = tgt[0], tgt[1]
-            self._record(Move(self.line_no, "line", self.xf(start), self.xf(tgt), first, 1, rapid=rapid))
+            self.plan.moves.append(Move(self.line_no, "line", self.xf(start), self.xf(tgt), first, 1, rapid=rapid))
             self._count(rapid)
 
     def _count(self, rapid: bool) -> None:
@@ -375,14 +372,11 @@ class Interpreter:
         else:
             self.moves_off += 1
 
-    def _record(self, mv: Move) -> None:
-        self.plan.moves.append(mv)
-
     def _inverse_feed(self, length_um: int, inv_f: int) -> int:
         """G93: the move takes 1/F minutes: feed = length * F (F in thousandths per minute)."""
         return min(max(length_um * inv_f // 1000, MIN_FEED), (1 << 31) - 1)
 
-    def _motion(self, motion: int, tgt: list[int], geom, extrude: bool, inv_f: int, b: Block) -> None:
+    def _motion(self, motion: int, tgt: list[int], geom, extrude: bool, inv_f: int) -> None:
         rapid = motion == 0
         if motion in (0, 1):
             feed = self.cfg.rapid_um_min if rapid else self.feed
@@ -413,10 +407,10 @@ class Interpreter:
             if kind == "arc2d":
                 c, r, ccw = extra
                 s = self.cfg.scale_q16
-                self._record(Move(self.line_no, "arc", self.xf(start), self.xf(tgt), first, n, self.xf(c),
+                self.plan.moves.append(Move(self.line_no, "arc", self.xf(start), self.xf(tgt), first, n, self.xf(c),
                                   r * s // SCALE_ONE, ccw))
             else:
-                self._record(Move(self.line_no, "poly", self.xf(start), self.xf(tgt), first, n,
+                self.plan.moves.append(Move(self.line_no, "poly", self.xf(start), self.xf(tgt), first, n,
                                   points=tuple(self.xf_exact(q) for q in extra)))
         self.bezier_c2 = geom[3] if motion == 5 else None
 

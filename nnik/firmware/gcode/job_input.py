@@ -130,11 +130,11 @@ def prepare(lines: list[bytes], cfg: MachineConfig, opts: JobOptions, source: st
         frame = fitting.user_frame(opts.scale, opts.offset, unit_um)
     if bounds is not None and ext is not None and not fitting.inside([frame.apply(p) for p in ends], bounds):
         moved = fitting.extent([frame.apply(p) for p in ends])
-        raise NnikError(f"{source}: {fitting.refusal(moved, bounds, cfg.origin_um)}")
+        raise NnikError(f"{source}: {fitting.refusal(moved, bounds)}")
     # the chip's build carries the options this file uses, no more (each one's flash: docs/firmware.md)
     final = replace(first, scale_q16=frame.scale_q16, shift_um=frame.shift_um, bounds_um=bounds,
                     features=frozenset(it.features_used))
-    z = [m for m in (it.z_seen or [0])]
+    z = it.z_seen or [0, 0]
     summary = {
         "flavour": flavour, "flavour_evidence": evidence, "tool": final.tool, "tool_rule": rule, "tool_rule_why": why,
         "moves_tool_on": it.moves_on, "moves_tool_off": it.moves_off, "frame": frame.how,
