@@ -334,7 +334,7 @@ int8_t nnik_gc_exec(nnik_gc_t *g)
         return NNIK_GC_OK;
     motion = b.motion == UNSET ? g->motion : b.motion;
     if ((HASW(W_F) && (V(W_F)->nd & NUM_NEG)) || (HASW(W_T) && (V(W_T)->nd & NUM_NEG)) ||
-        (HASW(W_S) && (V(W_S)->nd & NUM_NEG)) || (HASW(W_P) && (V(W_P)->nd & NUM_NEG) && motion != 5))
+        (HASW(W_S) && (V(W_S)->nd & NUM_NEG)) || (HASW(W_P) && (V(W_P)->nd & NUM_NEG) && (motion != 5 || b.nonmodal != NM_NONE)))
         return -4;
     if (HASW(W_T) && V(W_T)->ip > 255)
         return -38;

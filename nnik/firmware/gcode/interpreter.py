@@ -156,7 +156,8 @@ class Interpreter:
             return
         v = b.values
         for letter in "FPTS":
-            if letter in v and v[letter].neg and not (letter == "P" and (self.motion if b.motion is None else b.motion) == 5):
+            g5_offset = letter == "P" and b.nonmodal is None and (self.motion if b.motion is None else b.motion) == 5
+            if letter in v and v[letter].neg and not g5_offset:  # G5's P is an offset; G4's and G10's are not
                 raise GcodeLineError(4, letter)
         if "T" in v and v["T"].ip > 255:
             raise GcodeLineError(38)

@@ -133,3 +133,11 @@ def test_row_square_roots_are_exact_floors(rows, square):
 
     d = np.asarray(rows + [(square, 0), (square, 1), (-square, -1)], dtype=np.int64)
     assert isqrt_rows(d).tolist() == [isqrt(int(a * a + b * b)) for a, b in d.tolist()]
+
+
+def test_a_negative_p_is_a_g5_offset_never_a_dwell():
+    """With G5 modal, G5's own P may be negative; G4's may not (it was a negative rest)."""
+    it = Interpreter(CFG)
+    assert it.line("G5 I1 J0 P-1 Q0 X3 Y1") == "ok" and it.line("P-1 Q0 X5 Y1") == "ok"
+    assert it.line("G4 P-1") == "error:4" and it.line("G10 L2 P-1 X0") == "error:4"
+    assert not it.plan.dwell
