@@ -22,11 +22,11 @@ def _outdir(args, scn, create: bool = False) -> Path:
 
 
 def _warn_training(model) -> None:
-    """The wall-clock safety net cut training short: the model depends on this machine's load."""
+    """The user's wall-clock cap cut training short: the model depends on this machine's load."""
     stop = getattr(model, "stopped_by", "budget")
     if stop != "budget":
         console.print(f"[bold yellow]warning:[/bold yellow] training stopped by the {stop.replace('_', '-')} cap "
-                      f"(\\[training] max_seconds) before its iteration budget; the result depends on machine load "
+                      f"(\\[training] max_seconds) before its iteration budget; the result depends on machine load and is not reproducible "
                       f"(recorded as training.stopped_by in metrics.json)")
 
 

@@ -15,7 +15,7 @@ from tests.conftest import DATASETS
 GALVO = (DATASETS / "galvo_cba2012.toml").read_text()
 COREXY = (DATASETS / "corexy_nonlinear.toml").read_text()
 MEASURED = (DATASETS / "corexy_measured.toml").read_text()
-TINY_TRAINING = "[training]\nmax_seconds = 600\nadam_steps = 60\nlbfgs_rounds = 3\nrestarts = 1\n"
+TINY_TRAINING = "[training]\nadam_steps = 60\nlbfgs_rounds = 3\nrestarts = 1\n"
 
 
 def snapshot(d: Path) -> dict:

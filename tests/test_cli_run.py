@@ -11,6 +11,7 @@ import sys
 import pytest
 
 from nnik.cli import main
+from tests.bad_input import with_training
 from tests.conftest import DATASETS, write_toml
 
 MAX_MODULES = 6  # issue 17: following a scenario's max_error from the CLI to the pick crosses at most this many
@@ -28,7 +29,7 @@ def traced_run(tmp_path_factory):
     tmp_path = tmp_path_factory.mktemp("run")
     text = (DATASETS / "galvo_cba2012.toml").read_text()
     text = text.replace("n_train = 1000", "n_train = 300").replace("n_test = 20000", "n_test = 2000")
-    text = text.replace("max_seconds = 60", "max_seconds = 4\nrestarts = 1\nadam_steps = 500")
+    text = with_training(text, "[training]\nrestarts = 1\nadam_steps = 500\n")
     toml = write_toml(tmp_path, text)
     out = tmp_path / "out"
     meets, train, calls = Candidate.meets.__code__, train_model.__code__, []
@@ -93,7 +94,7 @@ def test_no_progress_bars_in_a_log(tmp_path):
     import sys
 
     text = (DATASETS / "galvo_cba2012.toml").read_text().replace("n_test = 20000", "n_test = 300")
-    text = text.replace("max_seconds = 60", "max_seconds = 20\nrestarts = 2\nadam_steps = 200\nlbfgs_rounds = 5")
+    text = with_training(text, "[training]\nrestarts = 2\nadam_steps = 200\nlbfgs_rounds = 5\n")
     toml = write_toml(tmp_path, text)
     out = tmp_path / "out"
     for cmd in (["generate", toml, "-o", out], ["train", toml, "-o", out]):

@@ -43,14 +43,14 @@ GOAL_BAND = 0.3  # the issue-15 goal: claimed within +-30 % of true
 
 
 def measured_toml(name: str, csv: Path, truth: Scenario, reading_step: float = 1.0, hidden=(8,),
-                  max_seconds: float = 20.0, extra: str = "") -> str:
+                  extra: str = "") -> str:
     """A measured scenario for `csv`, with the truth's actuator and workspace and no [target]."""
     act = "\n".join(f"{k} = {v!r}" if isinstance(v, str) else f"{k} = {v}"
                     for k, v in truth.raw["actuator"].items())
     ws = truth.workspace
     return (f'name = "{name}"\n\n[mechanism]\nkind = "measured"\ncsv = "{csv.name}"\nreading_step = {reading_step}\n\n'
             f"[actuator]\n{act}\n\n[workspace]\nx_mm = [{ws.x_mm[0]}, {ws.x_mm[1]}]\ny_mm = [{ws.y_mm[0]}, {ws.y_mm[1]}]\n\n"
-            f"[network]\nhidden = {list(hidden)}\nmode = \"residual\"\n\n[training]\nmax_seconds = {max_seconds}\n{extra}")
+            f"[network]\nhidden = {list(hidden)}\nmode = \"residual\"\n\n[training]\n{extra}")
 
 
 BELT_DISTORTION = {"A_deg": (89.4, 90.6), "B_deg": (-0.4, 0.4), "bow_mm": (-0.2, 0.2), "stretch": (-0.003, 0.003),

@@ -71,8 +71,10 @@ NETWORK = {
     "normalize": Param("bool", default=True, doc="normalise inputs to [-1, 1] (seed 004's fix)"),
 }
 TRAINING = {
-    "max_seconds": Param("float", default=60.0, check=positive,
-                         doc="wall-clock safety net; the budget is adam_steps, lbfgs_rounds, patience, restarts"),
+    "max_seconds": Param("float", check=positive,
+                         doc="optional wall-clock cap, unset by default; the budget is adam_steps, lbfgs_rounds, "
+                             "patience, restarts. When the cap cuts training short, the result depends on the "
+                             "machine's load: the console, metrics.json and the report say so"),
     "adam_steps": Param("int", default=3000, check=_between(0, 1_000_000)),
     "adam_lr": Param("float", default=0.01, check=positive),
     "lbfgs_rounds": Param("int", default=400, check=_between(0, 100_000), doc="L-BFGS outer iterations"),

@@ -46,7 +46,7 @@ def print_accuracy(m: dict) -> None:
     if pos:
         console.print(f"position error of the float MLP's commands: max {pos['max']:.2f} um, RMS {pos['rms']:.2f} um")
     console.print(f"ONNX vs torch: max |diff| {m['onnx']['max_abs_diff']:.2e} (tolerance {m['onnx']['tolerance']:g}); "
-                  f"training {m['train_seconds']:.1f} s")
+                  f"training {_seconds(m.get('train_seconds'))}")
     if "fixed" in m:
         f = m["fixed"]
         console.print(f"fixed point: tanh '{f['tanh_variant']}', int{f['weight_bits']} weights, "
@@ -134,3 +134,8 @@ def print_front(res: dict, unit: str) -> None:
     console.print(t)
     trials = res["trials"]
     console.print("trials: " + ", ".join(f"{v} {k}" for k, v in trials.items() if v))
+
+
+def _seconds(v) -> str:
+    """A recorded duration, or "time not recorded" (a model trained elsewhere, its time file gone)."""
+    return f"{v:.1f} s" if isinstance(v, (int, float)) and v == v else "time not recorded"

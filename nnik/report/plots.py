@@ -192,7 +192,7 @@ def tanh_error(
 
 
 def training_curve(path: Path, *, history: Sequence[Mapping], title: str) -> Path:
-    """Train (dashed) and validation (solid) MSE vs wall-clock time, log scale, per restart.
+    """Train (dashed) and validation (solid) MSE vs optimiser step, log scale, per restart.
 
     The restart whose state was kept (``best``) is drawn thick; the Adam -> L-BFGS switch is
     marked with a dot on each validation curve.
@@ -203,7 +203,7 @@ def training_curve(path: Path, *, history: Sequence[Mapping], title: str) -> Pat
     cmap = matplotlib.colormaps["tab10"]
     for r in restarts:
         hs = [h for h in history if int(h["restart"]) == r]
-        t = np.array([h["t"] for h in hs], dtype=np.float64)
+        t = np.array([h.get("step", h.get("t", i)) for i, h in enumerate(hs)], dtype=np.float64)
         tr = np.array([h["train"] for h in hs], dtype=np.float64)
         va = np.array([h["val"] for h in hs], dtype=np.float64)
         best = any(h.get("best") for h in hs)
@@ -221,7 +221,7 @@ def training_curve(path: Path, *, history: Sequence[Mapping], title: str) -> Pat
             ax.plot([t[k]], [va[k]], marker="*", color="black", markersize=12, linestyle="none",
                     label=f"best validation {va[k]:.3g}")
     ax.set_yscale("log")
-    ax.set_xlabel("wall-clock time (s)")
+    ax.set_xlabel("optimiser step (Adam steps, then L-BFGS rounds)")
     ax.set_ylabel("MSE (standardised outputs)")
     ax.grid(alpha=0.3, which="both")
     ax.legend(fontsize=7, ncol=2)

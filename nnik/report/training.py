@@ -14,6 +14,13 @@ def build(ctx) -> Section:
     sec = Section("training", "Training and export")
     t = Table("training-table", "Training", ["item", "value"])
     t.rows.append([txt("training time (s)", "key"), num(m.get("train_seconds"), D_SEC, "train_seconds")])
+    stop = (m.get("training") or {}).get("stopped_by")
+    if stop is not None:
+        capped = stop != "budget"
+        t.rows.append([txt("stopped by", "key"), Cell(
+            "the wall-clock cap ([training] max_seconds): capped, not reproducible" if capped
+            else "its iteration budget (reproducible)",
+            cls="bad" if capped else "good")])
     hist = list(getattr(ctx.inp.model, "history", None) or [])
     if hist:
         restarts = sorted({int(h["restart"]) for h in hist})
@@ -47,5 +54,5 @@ def plot_training(ctx, hist) -> Fig:
     rp.training_curve(ctx.out / PNG_TRAINING, history=hist,
                       title=f"{ctx.m['name']}: {'-'.join(map(str, net.get('shape', [])))} MLP, "
                             "Adam then L-BFGS (dot: switch)")
-    return Fig(PNG_TRAINING, "training curve", "Train (dashed) and validation (solid) loss against wall-clock "
-               "time, per restart; the kept restart is thick, its best validation point starred.")
+    return Fig(PNG_TRAINING, "training curve", "Train (dashed) and validation (solid) loss against the optimiser "
+               "step (Adam steps, then L-BFGS rounds), per restart; the kept restart is thick, its best validation point starred.")

@@ -59,7 +59,7 @@ def test_longest_name_builds_on_pic18(tmp_path):
     raw = tomllib.loads((DATASETS / "galvo_cba2012.toml").read_text())
     raw["name"] = "g" * MAX_NAME_LEN
     raw["dataset"].update(n_test=50)
-    raw["training"] = {"max_seconds": 600, "adam_steps": 60, "lbfgs_rounds": 3, "restarts": 1}
+    raw["training"] = {"adam_steps": 60, "lbfgs_rounds": 3, "restarts": 1}
     scn = Scenario.from_dict(raw, str(tmp_path / "long.toml"), DATASETS)
     out = tmp_path / "out"
     pipeline.generate(scn, out)

@@ -442,7 +442,6 @@ y_mm = [0.0, 200.0]
 hidden = [4]
 mode = "residual"
 [training]
-max_seconds = 3
 restarts = 1
 adam_steps = 200
 lbfgs_rounds = 20

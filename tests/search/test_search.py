@@ -318,11 +318,12 @@ def test_search_of_a_new_scenario_fits_the_ladder_once(tmp_path, capsys):
     warm start, which does not fit the ladder again."""
     from nnik import selection as sel
     from nnik.implementations.mlp.train import train_model
+    from tests.bad_input import with_training
     from tests.conftest import DATASETS, write_toml
 
     text = (DATASETS / "galvo_cba2012.toml").read_text()
     text = text.replace("n_train = 1000", "n_train = 300").replace("n_test = 20000", "n_test = 2000")
-    text = text.replace("max_seconds = 60", "max_seconds = 4\nrestarts = 1\nadam_steps = 500")
+    text = with_training(text, "[training]\nrestarts = 1\nadam_steps = 500\n")
     out = tmp_path / "out"
     calls = []
 

@@ -21,6 +21,7 @@ from nnik.cli import main  # noqa: E402
 from nnik.implementations import FAMILIES  # noqa: E402
 from nnik.implementations.verify import verify_on_target  # noqa: E402
 from nnik.report import write_report  # noqa: E402
+from tests.bad_input import with_training
 from tests.conftest import DATASETS, require_tool, write_toml  # noqa: E402
 from tests.report.test_report import check_numbers, parse  # noqa: E402
 from tests.search.test_search import _copy_run  # noqa: E402
@@ -167,7 +168,7 @@ def test_run_with_search_picks_from_the_search(tmp_path, capsys):
     require_tool("gpsim")
     text = (DATASETS / f"{NAME}.toml").read_text()
     text = text.replace("n_train = 1000", "n_train = 300").replace("n_test = 20000", "n_test = 2000")
-    text = text.replace("max_seconds = 60", "max_seconds = 4\nrestarts = 1\nadam_steps = 500")
+    text = with_training(text, "[training]\nrestarts = 1\nadam_steps = 500\n")
     text = text.replace("max_error = 0.01", "max_error = 0.5")
     out = tmp_path / "out"
     assert main(["run", str(write_toml(tmp_path, text)), "-o", str(out), "--search", "8"]) == 0, \

@@ -76,7 +76,7 @@ def _in_units(problem: Problem, model):
 
 # a search trial's MLP trains on a small budget so that it takes seconds (the scenario's own network keeps
 # the budget `nnik run` trained it with)
-FAST_TRAINING = {"adam_steps": 400, "lbfgs_rounds": 40, "restarts": 1, "patience": 15, "max_seconds": 20.0}
+FAST_TRAINING = {"adam_steps": 400, "lbfgs_rounds": 40, "restarts": 1, "patience": 15}
 
 
 def fast_problem(problem: Problem) -> Problem:

@@ -10,6 +10,8 @@ it on its own, for the MLP's experiments.
 
 from __future__ import annotations
 
+import math
+
 from pathlib import Path
 
 import numpy as np
@@ -71,6 +73,7 @@ def evaluate(outdir: Path) -> dict:
         raise NnikError(f"ONNX model differs from torch by {onnx_diff:.3g} (> {ONNX_TOLERANCE:g})", str(outdir / ONNX_FILE))
     shape = list(model.net.shape)
     pick_state.invalidate(outdir)  # metrics.json is rewritten without a selection
+    seconds = model.train_seconds if math.isfinite(model.train_seconds) else None  # its time file may be gone
     metrics = {
         "name": scn.name,
         "scenario": scn.source,
@@ -88,8 +91,8 @@ def evaluate(outdir: Path) -> dict:
         "float": {**error_stats(pred, q), "rel_pct": relative_pct(pred, q)},
         "affine_only": error_stats(affine_baseline(ds), q),
         "onnx": {"max_abs_diff": onnx_diff, "tolerance": ONNX_TOLERANCE, "ok": True},
-        "train_seconds": model.train_seconds,
-        "training": {"stopped_by": model.stopped_by, "seconds": model.train_seconds,
+        "train_seconds": seconds,
+        "training": {"stopped_by": model.stopped_by, "seconds": seconds,
                      "max_seconds": scn.training["max_seconds"],
                      "restarts_run": len({h["restart"] for h in model.history}),
                      "lbfgs_rounds_run": sum(h["phase"] == "lbfgs" for h in model.history),

@@ -3,13 +3,17 @@
 Adam warm-up, then L-BFGS (strong Wolfe) refinement with early stopping on the validation set,
 with a few deterministic restarts; the best validation state wins. The budget is counted in
 iterations (adam_steps, lbfgs_rounds, patience, restarts), so the same scenario and seed give the
-same model on any machine. [training] max_seconds is only a safety net: when it cuts training
-short, `stopped_by` says "wall_clock" (metrics.json records it, the CLI warns).
+same model on any machine. [training] max_seconds is an optional cap that only the user sets: when
+it cuts training short, `stopped_by` says "wall_clock" (metrics.json and the report record it, the
+CLI warns) and the result is not reproducible.
 """
 
 from __future__ import annotations
 
 import copy
+import io
+import json
+import math
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -22,9 +26,11 @@ from nnik.progress import bar as progress_bar
 
 from nnik.machine.data import Dataset, Scaling
 from nnik.errors import NnikError
+from nnik.files.atomic_write import write_file_atomic
 from nnik.machine.scenario import Scenario
 
 MODEL_FORMAT = 1
+TIME_FILE = "train_time.json"  # beside model.pt: how long training took (a figure, never an input)
 SMALL_PROBLEM = 4_000_000  # training rows x hidden neurons below which one thread is faster
 MAX_FIT_ROWS = 20_000  # rows per split that full-batch training fits on (a fixed subset beyond)
 
@@ -74,6 +80,10 @@ class TrainedModel:
         return s.base(xn) + s.out_mean + s.out_std * y
 
     def save(self, path: Path) -> None:
+        """model.pt (atomically) and, beside it, the training's wall-clock time (TIME_FILE). model.pt
+        holds nothing that depends on the machine's load, so its bytes (and the hashes that the pick
+        records) are the same on an idle or a loaded machine."""
+        buf = io.BytesIO()
         torch.save(
             {
                 "format": MODEL_FORMAT,
@@ -83,13 +93,14 @@ class TrainedModel:
                 "scenario_raw": self.scenario.raw,
                 "scenario_source": self.scenario.source,
                 "scenario_base_dir": str(self.scenario.base_dir),
-                "history": self.history,
-                "train_seconds": self.train_seconds,
+                "history": self.history,  # counted in optimiser steps: no wall-clock time in this file
                 "normalize": self.normalize,
                 "stopped_by": self.stopped_by,
             },
-            path,
+            buf,
         )
+        write_file_atomic(Path(path), buf.getvalue())
+        write_file_atomic(Path(path).parent / TIME_FILE, json.dumps({"train_seconds": self.train_seconds}) + "\n")
 
     @classmethod
     def load(cls, path: Path) -> "TrainedModel":
@@ -112,14 +123,23 @@ class TrainedModel:
             net.load_state_dict(blob["state_dict"])
             scaling = Scaling.from_dict(blob["scaling"])
             raw, source, base = blob["scenario_raw"], str(blob["scenario_source"]), Path(blob["scenario_base_dir"])
-            history, seconds, normalize = list(blob["history"]), float(blob["train_seconds"]), bool(blob["normalize"])
+            history, normalize = list(blob["history"]), bool(blob["normalize"])
             stopped_by = str(blob.get("stopped_by", "budget"))
         except (KeyError, TypeError, ValueError, RuntimeError, AttributeError) as exc:
             reason = " ".join(line.strip() for line in str(exc).splitlines())[:160]
             raise NnikError(f"corrupt nnik model file ({type(exc).__name__}: {reason}); run `nnik train` again",
                             str(path)) from None
         scn = Scenario.from_dict(raw, source, base)
-        return cls(net, scaling, scn, history, seconds, normalize, stopped_by)
+        return cls(net, scaling, scn, history, read_train_seconds(path), normalize, stopped_by)
+
+
+def read_train_seconds(model_path: Path) -> float:
+    """The training time recorded beside model.pt (NaN, shown as "—", when it is missing or unreadable)."""
+    try:
+        v = json.loads((Path(model_path).parent / TIME_FILE).read_text())["train_seconds"]
+        return float(v) if isinstance(v, (int, float)) and math.isfinite(v) and v >= 0 else math.nan
+    except (OSError, ValueError, KeyError, TypeError):
+        return math.nan
 
 
 def make_scaling(scn: Scenario, ds: Dataset, normalize: bool) -> Scaling:
@@ -165,7 +185,8 @@ def train_model(scn: Scenario, ds: Dataset, normalize: bool | None = None, progr
     # count depends only on the problem, so the same budget gives the same model everywhere.
     torch.set_num_threads(1 if len(xt) * sum(scn.network["hidden"]) < SMALL_PROBLEM else 2)
     t_start = time.perf_counter()
-    deadline = t_start + cfg["max_seconds"]  # the safety net, not the budget
+    cap = cfg.get("max_seconds")
+    deadline = t_start + cap if cap else float("inf")  # the user's optional cap, not the budget
     best: tuple[float, dict, int] | None = None
     history: list[dict] = []
     stopped_by = "budget"
@@ -196,9 +217,8 @@ def _fit_one(net, xt, yt, xv, yv, cfg, deadline, restart, history, t_start, bar)
         with torch.no_grad():
             return float(mse(net(xv), yv))
 
-    def log(phase, train_loss):
-        history.append({"restart": restart, "phase": phase, "t": time.perf_counter() - t_start,
-                        "train": float(train_loss), "val": val_loss()})
+    def log(phase, step, train_loss):
+        history.append({"restart": restart, "phase": phase, "step": step, "train": float(train_loss), "val": val_loss()})
 
     opt = torch.optim.Adam(net.parameters(), lr=cfg["adam_lr"])
     sched = torch.optim.lr_scheduler.CosineAnnealingLR(opt, max(1, cfg["adam_steps"]), eta_min=cfg["adam_lr"] / 100)
@@ -209,7 +229,7 @@ def _fit_one(net, xt, yt, xv, yv, cfg, deadline, restart, history, t_start, bar)
         opt.step()
         sched.step()
         if step % 100 == 0:
-            log("adam", loss.item())
+            log("adam", step, loss.item())
         if time.perf_counter() > deadline:
             return val_loss(), copy.deepcopy(net.state_dict()), True
 
@@ -223,9 +243,9 @@ def _fit_one(net, xt, yt, xv, yv, cfg, deadline, restart, history, t_start, bar)
         return loss
 
     best_val, best_state, stale = val_loss(), copy.deepcopy(net.state_dict()), 0
-    for _ in range(cfg["lbfgs_rounds"]):
+    for rnd in range(cfg["lbfgs_rounds"]):
         loss = lbfgs.step(closure)
-        log("lbfgs", loss.item())
+        log("lbfgs", cfg["adam_steps"] + rnd, loss.item())
         v = history[-1]["val"]
         if not np.isfinite(v):
             break

@@ -53,16 +53,16 @@ def test_onnx_agrees_with_torch(galvo_run):
     assert json.loads(meta["nnik"])["scenario"] == "galvo_cba2012"
 
 
-def _quick(tmp_path, name, normalize=None, seconds=4.0):
+def _quick(tmp_path, name, normalize=None):
     scn = load_scenario(DATASETS / f"{name}.toml")
-    scn.training.update(max_seconds=seconds, restarts=1)
+    scn.training.update(restarts=1)
     pipeline.generate(scn, tmp_path)
     return scn, Dataset.load(tmp_path / "data.npz"), normalize
 
 
 def test_training_is_deterministic(tmp_path):
     """Same seed, same weights (with a budget too large to cut the run short)."""
-    scn, ds, _ = _quick(tmp_path, "galvo_cba2012", seconds=600.0)
+    scn, ds, _ = _quick(tmp_path, "galvo_cba2012")
     scn.training.update(adam_steps=200, lbfgs_rounds=3)
     a = train_model(scn, ds, progress=False).net.state_dict()
     b = train_model(scn, ds, progress=False).net.state_dict()
@@ -72,7 +72,7 @@ def test_training_is_deterministic(tmp_path):
 
 def test_no_normalize_reproduces_seed004_effect(tmp_path):
     """Raw mm inputs saturate the tanh units: the error grows by a large factor (seed 004 Table 1)."""
-    scn, ds, _ = _quick(tmp_path, "hbot_unicamp", seconds=600.0)  # budget by iterations, not time
+    scn, ds, _ = _quick(tmp_path, "hbot_unicamp")
     scn.training.update(adam_steps=1500, lbfgs_rounds=40)
     raw = train_model(scn, ds, normalize=False, progress=False).predict(ds.p["test"])
     norm = train_model(scn, ds, normalize=True, progress=False).predict(ds.p["test"])

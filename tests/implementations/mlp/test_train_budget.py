@@ -17,7 +17,7 @@ from tests.conftest import write_toml
 
 def test_same_seed_same_budget_same_model(tmp_path):
     scn = load_scenario(write_toml(tmp_path, with_training(
-        GALVO, "[training]\nmax_seconds = 600\nadam_steps = 150\nlbfgs_rounds = 4\nrestarts = 2\n")))
+        GALVO, "[training]\nadam_steps = 150\nlbfgs_rounds = 4\nrestarts = 2\n")))
     ds = build_dataset(scn)
     a = train_model(scn, ds, progress=False)
     b = train_model(scn, ds, progress=False)
