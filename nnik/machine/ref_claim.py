@@ -130,7 +130,7 @@ def draw_noise(rng: np.random.Generator, noise, n: int) -> np.ndarray:
 def bootstrap_fields(refit: Callable, x_marks: np.ndarray, q_fit: np.ndarray, predict: Callable,
                      box: tuple[np.ndarray, np.ndarray], inside: Callable, noise, method: str) -> ErrorFields:
     """``refit(x, q) -> predictor (p_mm -> q)`` is the chosen candidate refitted to readings q at
-    the marks' scaled inputs ``x_marks``; ``q_fit`` the reference's values at the marks,
+    the marks' scaled inputs ``x_marks`` (q (n, 2, B): B replicates at once, predictions (m, 2, B)); ``q_fit`` the reference's values at the marks,
     ``predict(p_mm)`` the reference; ``box`` (lo, hi) mm the marks' box, ``inside(p_mm)`` the
     hull test."""
     n = len(x_marks)
@@ -140,10 +140,9 @@ def bootstrap_fields(refit: Callable, x_marks: np.ndarray, q_fit: np.ndarray, pr
     nodes = np.stack(np.meshgrid(gx, gy, indexing="xy"), -1).reshape(-1, 2)
     base = predict(nodes)
     rng = np.random.default_rng(BOOT_SEED)
-    fields = np.empty((BOOT, g, g, 2), dtype=np.float32)
-    for b in range(BOOT):
-        f = refit(x_marks, q_fit + draw_noise(rng, noise, n))
-        fields[b] = (f(nodes) - base).reshape(g, g, 2)
+    draws = np.stack([draw_noise(rng, noise, n) for _ in range(BOOT)], -1)  # (n, 2, BOOT)
+    f = refit(x_marks, q_fit[:, :, None] + draws)  # every replicate at once: one factorisation
+    fields = (f(nodes) - base[:, :, None]).transpose(2, 0, 1).reshape(BOOT, g, g, 2).astype(np.float32)
     return ErrorFields(lo, hi, fields, inside(nodes).reshape(g, g), method)
 
 
