@@ -36,6 +36,14 @@ BOOT_SEED = 15
 GRID_MIN, GRID_MAX, GRID_PER_MARK = 65, 257, 6  # grid nodes per axis: GRID_PER_MARK x sqrt(marks), clipped
 
 
+TOP_CELLS = 64  # grid cells (highest bound first) a replicate's claim is first evaluated in
+
+
+def _ranges(starts: np.ndarray, lens: np.ndarray) -> np.ndarray:
+    """The indices of the ranges [start, start + len), concatenated."""
+    return np.arange(lens.sum()) - np.repeat(np.cumsum(lens) - lens, lens) + np.repeat(starts, lens)
+
+
 @dataclass
 class ErrorFields:
     """``BOOT`` draws of the reference's error field on a regular grid over the marks' box (mm)."""
@@ -76,9 +84,9 @@ class ErrorFields:
         p, d = np.asarray(p_mm, dtype=np.float64).reshape(-1, 2)[keep], d[keep]
         cells = self._cells(p)
         # exact, but few points evaluated: within a grid cell a replicate's field is one bilinear
-        # patch, bounded by its corners; each replicate is evaluated where d peaks either way in
-        # each cell, then at every point of the cells whose bound (d's extreme + the corners')
-        # could still beat that
+        # patch, bounded by its corners, so a cell's bound is d's extreme there plus the corners'.
+        # Each replicate is evaluated where d peaks (either way, per output) in the TOP_CELLS cells
+        # of highest bound, then at every point of the cells whose bound could still beat that
         gx = self.fields.shape[2]
         cell = cells[0][:, 1] * gx + cells[0][:, 0]
         order = np.argsort(cell, kind="stable")
@@ -90,21 +98,23 @@ class ErrorFields:
         counts = np.diff(np.r_[starts, len(cs)])
         dmax, dmin = np.maximum.reduceat(ds, starts, axis=0), np.minimum.reduceat(ds, starts, axis=0)
         peak = np.flatnonzero(np.any((ds >= dmax[seg]) | (ds <= dmin[seg]), axis=1))
+        peak_start = np.searchsorted(seg[peak], np.arange(len(starts)))
+        peak_count = np.diff(np.r_[peak_start, len(peak)])
         cx, cy = cs[starts] % gx, cs[starts] // gx
 
         def worst(b, idx):
             return float(np.abs(ds[idx] + self.at(b, ps[idx], (c0[idx], c1[idx]))).max())
         m = []
         for b in range(len(self.fields)):
-            low = worst(b, peak)
             f = self.fields[b]
             corners = np.stack([f[cy, cx], f[cy, cx + 1], f[cy + 1, cx], f[cy + 1, cx + 1]])
             bound = np.maximum(dmax + corners.max(0), -(dmin + corners.min(0))).max(1)
+            top = np.argpartition(bound, len(bound) - TOP_CELLS)[-TOP_CELLS:] if len(bound) > TOP_CELLS else \
+                np.arange(len(bound))
+            low = worst(b, peak[_ranges(peak_start[top], peak_count[top])])
             cand = np.flatnonzero(bound > low)
             if len(cand):  # every point of those cells
-                lens = counts[cand]
-                idx = np.arange(lens.sum()) - np.repeat(np.cumsum(lens) - lens, lens) + np.repeat(starts[cand], lens)
-                low = max(low, worst(b, idx))
+                low = max(low, worst(b, _ranges(starts[cand], counts[cand])))
             m.append(low)
         return float(np.quantile(m, LEVEL))
 

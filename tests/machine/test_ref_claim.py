@@ -6,6 +6,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from nnik.machine import ref_claim
 from nnik.machine.reference import Noise
@@ -127,3 +129,19 @@ def test_an_outside_candidate_with_unpaired_residuals_is_refused():
     q = np.rint(p * [3.0, -2.0])
     with pytest.raises(ValueError, match="30 residuals for 20 positions"):
         fit_reference(p, q, None, extra={"mlp": (lambda pm: pm, p[:20], np.zeros((30, 2)))}, gp=False)
+
+
+@settings(max_examples=25, deadline=None)
+@given(seed=st.integers(0, 2**31), g=st.integers(3, 60), d_scale=st.sampled_from([0.0, 0.01, 0.1, 1.0]),
+       points=st.integers(1, 5000))
+def test_the_claim_is_the_brute_force_on_random_fields(seed, g, d_scale, points):
+    """The claim evaluates a few cells first and then only those that could beat them: the same
+    figure as every point evaluated, whatever the grid, the points and d's size against the fields'."""
+    rng = np.random.default_rng(seed)
+    f = rng.normal(0, 0.1, (8, g, g, 2)).astype(np.float32)
+    ef = ref_claim.ErrorFields(np.zeros(2), np.full(2, 10.0), f, np.ones((g, g), bool), "test")
+    p = rng.uniform(0, 10, (points, 2))
+    d = d_scale * np.sin(p[:, :1] * rng.uniform(0.1, 5) + np.array([0.0, 1.0])) + rng.normal(0, 0.01, (points, 2))
+    cells = ef._cells(p)
+    brute = [float(np.abs(d + ef.at(b, p, cells)).max()) for b in range(8)]
+    assert ef.claim(p, d) == float(np.quantile(brute, ref_claim.LEVEL))
