@@ -27,7 +27,7 @@ test: setup toolchains
 
 # per-target tables (MLP kernels, float math.h IK, LUT, seed 000 Table 1), then the estimator's
 # validation sweep (predicted vs measured cycles and flash on 11 architectures x 2 tanh); the measured
-# machines' claimed accuracy against a known truth (nnik.bench.measured), and
+# machines' claimed accuracy against a known truth and the 2,000-mark scenario's whole run, timed (nnik.bench.measured), and
 # 300 random G-code jobs per machine on the simulated Uno against the Python model (CI runs 10),
 # 30 random galvos and 20 random belt frames through the ladders, 12 random measured frames' claims,
 # and the G-code firmware's planner and input shaper on the simulated Uno (job time, step rate,

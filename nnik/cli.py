@@ -11,7 +11,7 @@ from pathlib import Path
 from rich.table import Table
 
 from nnik import pipeline
-from nnik.errors import NnikError
+from nnik.errors import NnikError, NnikWarning, warning_line
 from nnik.files.outdir import check_model_dir, check_outdir, release_locks
 from nnik.report.console import console, print_accuracy, print_front, print_selection
 
@@ -428,6 +428,7 @@ def main(argv: list[str] | None = None) -> int:
     # after success they follow the output, one line each, so nothing is lost.
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", RuntimeWarning)
+        warnings.simplefilter("always", NnikWarning)
         try:
             args.func(args)
         except NnikError as exc:
@@ -439,7 +440,7 @@ def main(argv: list[str] | None = None) -> int:
         finally:
             release_locks()
     for w in {(str(w.message), w.filename, w.lineno): w for w in caught}.values():
-        print(f"nnik: warning: {w.category.__name__}: {w.message} ({Path(w.filename).name}:{w.lineno})", file=sys.stderr)
+        print(warning_line(w), file=sys.stderr)
     return 0
 
 

@@ -10,3 +10,17 @@ class NnikError(Exception):
         parts = [str(p) for p in (source, key) if p]
         prefix = ": ".join(parts)
         super().__init__(f"{prefix}: {message}" if prefix else message)
+
+
+class NnikWarning(UserWarning):
+    """A problem nnik works around, reported as one `nnik: warning: ...` line (the run goes on)."""
+
+
+def warning_line(w) -> str:
+    """The stderr line of a caught warning: an NnikWarning as it reads, others with their type and
+    where they arose."""
+    from pathlib import Path
+
+    if issubclass(w.category, NnikWarning):
+        return f"nnik: warning: {w.message}"
+    return f"nnik: warning: {w.category.__name__}: {w.message} ({Path(w.filename).name}:{w.lineno})"

@@ -97,7 +97,7 @@ def build_problem(scn, ds: Dataset, model=None):
     if not scn.mechanism.analytic:  # measured: the families compile a reference fitted to the marks
         from nnik.machine.reference import reference_for
 
-        mlp = None if model is None else (model.predict, model.predict(ds.p["test"]) - ds.q["test"])
+        mlp = None if model is None else (model.predict, ds.p["test"], model.predict(ds.p["test"]) - ds.q["test"])
         reference = reference_for(scn, mlp)
     scn = with_default_target(scn, reference.error_max if reference is not None else 0.0)
     problem = Problem(scn, ds, unit_um=scn.export["input_unit_um"], reference=reference)

@@ -11,8 +11,10 @@ selection, and the pick is measured against the truth over the marks' hull:
   (the dense grid inside the marks' hull); delivered: the same for the rounded outputs.
 
 ``python -m nnik.bench.measured`` runs the issue-15 goal (corexy_nonlinear, 400 scattered marks
-and a 7x7 grid, no [target], full `nnik run` steps with verification) and the shipped
-corexy_measured scenario; ``--sweep N`` adds N random belt frames (CoreXY/HBOT with skew and
+and a 7x7 grid, no [target], full `nnik run` steps with verification), the shipped
+corexy_measured scenario, and (issue 25) the shipped 2,000-mark corexy_measured_2000 as a whole
+`nnik run` (report and the MLP's own C included), its wall-clock and CPU time (children
+included) against the 10-minute goal on 2 cores; ``--sweep N`` adds N random belt frames (CoreXY/HBOT with skew and
 distortion) through the reference and the ladder only (no simulators). Figures go to
 build/bench/measured.json too.
 """
@@ -114,6 +116,26 @@ def run_scenario(toml: Path, out: Path) -> None:
     pipeline.run(load_scenario(toml), out, progress=False, mlp_verify=())
 
 
+RUN_GOAL_S = 600.0  # issue 25: 400 to 2,000 marks run in 10 minutes on 2 cores
+FULL_RUNS = {"corexy_measured_2000": "corexy_nonlinear"}  # shipped measured scenario -> its truth: timed whole runs
+
+
+def timed_full_run(toml: Path, out: Path) -> dict:
+    """A whole `nnik run` through the CLI: its exit code, wall-clock and CPU seconds (this
+    process and its children: the compilers and simulators)."""
+    import os
+    import time
+
+    from nnik.cli import main as cli_main
+
+    t0, c0 = time.perf_counter(), os.times()
+    rc = cli_main(["run", str(toml), "-o", str(out)])
+    c1 = os.times()
+    cpu = (c1.user + c1.system + c1.children_user + c1.children_system
+           - c0.user - c0.system - c0.children_user - c0.children_system)
+    return {"exit": rc, "wall_s": time.perf_counter() - t0, "cpu_s": cpu}
+
+
 def goal_cases(work: Path) -> list[tuple[str, Path, Scenario]]:
     """(label, scenario TOML, truth): 400 scattered marks, a 7x7 grid, the shipped scenario."""
     truth = load_scenario(DATASETS / "corexy_nonlinear.toml")
@@ -187,6 +209,17 @@ def main(argv=None) -> int:
         out = OUT / Path(toml).stem
         run_scenario(toml, out)
         rows.append({"case": label, **judge_run(out, truth)})
+    slow = []
+    for name, truth_name in FULL_RUNS.items():
+        out = OUT / name
+        timing = timed_full_run(DATASETS / f"{name}.toml", out)
+        console.print(f"{name}: exit {timing['exit']}, {timing['wall_s']:.0f} s wall, {timing['cpu_s']:.0f} s CPU "
+                      f"(goal {RUN_GOAL_S:.0f} s)")
+        if timing["exit"] != 0 or timing["wall_s"] > RUN_GOAL_S:
+            slow.append(name)
+        if timing["exit"] == 0:
+            rows.append({"case": f"shipped {name} (whole run)", **timing,
+                         **judge_run(out, load_scenario(DATASETS / f"{truth_name}.toml"))})
     if args.sweep:
         rows += sweep(args.sweep, OUT / "sweep")
     print_rows(rows)
@@ -195,7 +228,9 @@ def main(argv=None) -> int:
     bad = [r for r in rows if not HONEST * r["true_max"] <= r["claimed"] <= CLAIM_OVER * r["true_max"]]
     for r in bad:
         console.print(f"[red]claim outside {HONEST:g} .. {CLAIM_OVER:g} x true[/red]: {r['case']}")
-    return 1 if bad else 0
+    for name in slow:
+        console.print(f"[red]{name}: failed or took over {RUN_GOAL_S:.0f} s[/red] (on a loaded machine, see its CPU time)")
+    return 1 if bad or slow else 0
 
 
 if __name__ == "__main__":

@@ -12,10 +12,10 @@ from scipy.stats import qmc
 
 from nnik.errors import NnikError
 from nnik.machine.kinematics.base import Workspace
+from nnik.machine.kinematics.measured import split_sizes
 from nnik.machine.scenario import Scenario
 
 SPLITS = ("train", "val", "test")
-MEASURED_FRACTIONS = {"test": 0.25, "val": 0.15}  # the rest trains
 
 
 def sample_points(ws: Workspace, n: int, method: str, seed: int) -> np.ndarray:
@@ -106,14 +106,14 @@ def _split_measured(scn: Scenario, seed: int) -> Dataset:
     m = scn.mechanism
     n = len(m.positions_mm)
     order = np.random.default_rng(seed).permutation(n)
-    n_test = max(5, int(round(n * MEASURED_FRACTIONS["test"])))
-    n_val = max(5, int(round(n * MEASURED_FRACTIONS["val"])))
+    sizes = split_sizes(n)
+    n_test, n_val = sizes["test"], sizes["val"]
     idx = {"test": order[:n_test], "val": order[n_test:n_test + n_val], "train": order[n_test + n_val:]}
     p = {s: m.positions_mm[i] for s, i in idx.items()}
     q = {s: m.commands[i] for s, i in idx.items()}
     meta = {"scenario": scn.name, "scenario_hash": scn.fingerprint, "source": scn.source, "unit": scn.unit, "outputs": scn.outputs,
             "sampling": "measured rows", "seed": seed, "truth": f"held-out rows of {m.csv_path.name}",
-            "duplicates_merged": int(m.duplicates_merged)}
+            "duplicates_merged": int(m.duplicates_merged), "copies": int(m.copies)}
     return Dataset(p, q, meta)
 
 

@@ -36,6 +36,14 @@ BOOT_SEED = 15
 GRID_MIN, GRID_MAX, GRID_PER_MARK = 65, 257, 6  # grid nodes per axis: GRID_PER_MARK x sqrt(marks), clipped
 
 
+TOP_CELLS = 64  # grid cells (highest bound first) a replicate's claim is first evaluated in
+
+
+def _ranges(starts: np.ndarray, lens: np.ndarray) -> np.ndarray:
+    """The indices of the ranges [start, start + len), concatenated."""
+    return np.arange(lens.sum()) - np.repeat(np.cumsum(lens) - lens, lens) + np.repeat(starts, lens)
+
+
 @dataclass
 class ErrorFields:
     """``BOOT`` draws of the reference's error field on a regular grid over the marks' box (mm)."""
@@ -76,9 +84,9 @@ class ErrorFields:
         p, d = np.asarray(p_mm, dtype=np.float64).reshape(-1, 2)[keep], d[keep]
         cells = self._cells(p)
         # exact, but few points evaluated: within a grid cell a replicate's field is one bilinear
-        # patch, bounded by its corners; each replicate is evaluated where d peaks either way in
-        # each cell, then at every point of the cells whose bound (d's extreme + the corners')
-        # could still beat that
+        # patch, bounded by its corners, so a cell's bound is d's extreme there plus the corners'.
+        # Each replicate is evaluated where d peaks (either way, per output) in the TOP_CELLS cells
+        # of highest bound, then at every point of the cells whose bound could still beat that
         gx = self.fields.shape[2]
         cell = cells[0][:, 1] * gx + cells[0][:, 0]
         order = np.argsort(cell, kind="stable")
@@ -90,21 +98,23 @@ class ErrorFields:
         counts = np.diff(np.r_[starts, len(cs)])
         dmax, dmin = np.maximum.reduceat(ds, starts, axis=0), np.minimum.reduceat(ds, starts, axis=0)
         peak = np.flatnonzero(np.any((ds >= dmax[seg]) | (ds <= dmin[seg]), axis=1))
+        peak_start = np.searchsorted(seg[peak], np.arange(len(starts)))
+        peak_count = np.diff(np.r_[peak_start, len(peak)])
         cx, cy = cs[starts] % gx, cs[starts] // gx
 
         def worst(b, idx):
             return float(np.abs(ds[idx] + self.at(b, ps[idx], (c0[idx], c1[idx]))).max())
         m = []
         for b in range(len(self.fields)):
-            low = worst(b, peak)
             f = self.fields[b]
             corners = np.stack([f[cy, cx], f[cy, cx + 1], f[cy + 1, cx], f[cy + 1, cx + 1]])
             bound = np.maximum(dmax + corners.max(0), -(dmin + corners.min(0))).max(1)
+            top = np.argpartition(bound, len(bound) - TOP_CELLS)[-TOP_CELLS:] if len(bound) > TOP_CELLS else \
+                np.arange(len(bound))
+            low = worst(b, peak[_ranges(peak_start[top], peak_count[top])])
             cand = np.flatnonzero(bound > low)
             if len(cand):  # every point of those cells
-                lens = counts[cand]
-                idx = np.arange(lens.sum()) - np.repeat(np.cumsum(lens) - lens, lens) + np.repeat(starts[cand], lens)
-                low = max(low, worst(b, idx))
+                low = max(low, worst(b, _ranges(starts[cand], counts[cand])))
             m.append(low)
         return float(np.quantile(m, LEVEL))
 
@@ -130,7 +140,7 @@ def draw_noise(rng: np.random.Generator, noise, n: int) -> np.ndarray:
 def bootstrap_fields(refit: Callable, x_marks: np.ndarray, q_fit: np.ndarray, predict: Callable,
                      box: tuple[np.ndarray, np.ndarray], inside: Callable, noise, method: str) -> ErrorFields:
     """``refit(x, q) -> predictor (p_mm -> q)`` is the chosen candidate refitted to readings q at
-    the marks' scaled inputs ``x_marks``; ``q_fit`` the reference's values at the marks,
+    the marks' scaled inputs ``x_marks`` (q (n, 2, B): B replicates at once, predictions (m, 2, B)); ``q_fit`` the reference's values at the marks,
     ``predict(p_mm)`` the reference; ``box`` (lo, hi) mm the marks' box, ``inside(p_mm)`` the
     hull test."""
     n = len(x_marks)
@@ -140,10 +150,9 @@ def bootstrap_fields(refit: Callable, x_marks: np.ndarray, q_fit: np.ndarray, pr
     nodes = np.stack(np.meshgrid(gx, gy, indexing="xy"), -1).reshape(-1, 2)
     base = predict(nodes)
     rng = np.random.default_rng(BOOT_SEED)
-    fields = np.empty((BOOT, g, g, 2), dtype=np.float32)
-    for b in range(BOOT):
-        f = refit(x_marks, q_fit + draw_noise(rng, noise, n))
-        fields[b] = (f(nodes) - base).reshape(g, g, 2)
+    draws = np.stack([draw_noise(rng, noise, n) for _ in range(BOOT)], -1)  # (n, 2, BOOT)
+    f = refit(x_marks, q_fit[:, :, None] + draws)  # every replicate at once: one factorisation
+    fields = (f(nodes) - base[:, :, None]).transpose(2, 0, 1).reshape(BOOT, g, g, 2).astype(np.float32)
     return ErrorFields(lo, hi, fields, inside(nodes).reshape(g, g), method)
 
 

@@ -42,6 +42,7 @@ LOO_MARKS = 100
 CV_SEED = 0
 POLY_DEGREES = (1, 2, 3, 4)
 RBF_SMOOTHING = (0.0, 1e-4, 1e-3, 1e-2, 1e-1, 1.0, 10.0, 100.0)
+GP_HYPER_MARKS = 500  # the marks the GP's hyperparameters are fitted to (a fixed subset beyond)
 GP_MAX_MARKS = 1500  # a GP fit is O(n^3): beyond this it is left out (and the report says so)
 RBF_MAX_MARKS = 4000  # beyond this the spline is local (64 nearest marks)
 MS_MARGIN = 1.0  # standard errors of the CV mean square added before the noise is taken off (an upper estimate)
@@ -105,10 +106,15 @@ def _poly_features(x: np.ndarray, degree: int) -> np.ndarray:
     return np.stack([x[:, 0] ** i * x[:, 1] ** (d - i) for d in range(degree + 1) for i in range(d + 1)], 1)
 
 
+def _columns(y: np.ndarray) -> np.ndarray:
+    """Readings (n, 2) or, for many replicates at once, (n, 2, B) as columns (n, 2 B)."""
+    return y.reshape(len(y), -1)
+
+
 def _fit_poly(degree: int):
     def fit(x, y):
-        coef, *_ = np.linalg.lstsq(_poly_features(x, degree), y, rcond=None)
-        return lambda xq: _poly_features(xq, degree) @ coef
+        coef, *_ = np.linalg.lstsq(_poly_features(x, degree), _columns(y), rcond=None)
+        return lambda xq: (_poly_features(xq, degree) @ coef).reshape(len(xq), *y.shape[1:])
     return fit
 
 
@@ -116,8 +122,9 @@ def _fit_rbf(smoothing: float, neighbors: int | None = None):
     def fit(x, y):
         from scipy.interpolate import RBFInterpolator
 
-        f = RBFInterpolator(x, y, kernel="thin_plate_spline", smoothing=smoothing, degree=1, neighbors=neighbors)
-        return f
+        f = RBFInterpolator(x, _columns(y), kernel="thin_plate_spline", smoothing=smoothing, degree=1,
+                            neighbors=neighbors)
+        return lambda xq: f(xq).reshape(len(xq), *y.shape[1:])
     return fit
 
 
@@ -140,18 +147,32 @@ def _gp(kernel, noise_var: float | None, x, y, optimize: bool):
 
 
 def gp_kernels(x, y, noise_var: np.ndarray | None) -> list:
-    """Per output, the GP's kernel with its hyperparameters fitted (marginal likelihood) to every mark;
-    the CV folds reuse them (refitting them per fold costs seconds and moves the score little)."""
+    """Per output, the GP's kernel with its hyperparameters fitted (marginal likelihood) to the marks,
+    at most GP_HYPER_MARKS of them (a fixed subset beyond: each step of the fit is O(n^3), and a
+    few hundred marks pin a length scale and an amplitude down); the CV folds reuse them
+    (refitting them per fold costs seconds and moves the score little)."""
+    if len(x) > GP_HYPER_MARKS:
+        keep = np.sort(np.random.default_rng(CV_SEED).choice(len(x), GP_HYPER_MARKS, replace=False))
+        x, y = x[keep], y[keep]
     return [_gp(_gp_kernel(None if noise_var is None else noise_var[o]), None if noise_var is None else noise_var[o],
                 x, y[:, o], True).kernel_ for o in range(y.shape[1])]
 
 
+GP_PREDICT_ENTRIES = 4_000_000  # kernel entries (query rows x marks) per chunk of a GP's prediction
+
+
+def _gp_predict(gp, xq: np.ndarray) -> np.ndarray:
+    """The GP's mean at xq, in chunks: its cross-kernel matrix grows with the marks."""
+    rows = max(256, GP_PREDICT_ENTRIES // len(gp.X_train_))
+    return np.concatenate([gp.predict(xq[i:i + rows]) for i in range(0, len(xq), rows)]) if len(xq) else gp.predict(xq)
+
+
 def _fit_gp(kernels: list, noise_var: np.ndarray | None):
     """One GP per output with fixed kernels; alpha = the known noise variance, else the kernels'
-    WhiteKernel."""
+    WhiteKernel. Readings (n, 2, B) fit B replicates at once (one factorisation per output)."""
     def fit(x, y):
         gps = [_gp(k, None if noise_var is None else noise_var[o], x, y[:, o], False) for o, k in enumerate(kernels)]
-        return lambda xq: np.stack([g.predict(xq) for g in gps], 1)
+        return lambda xq: np.stack([_gp_predict(g, xq) for g in gps], 1)
     return fit
 
 
@@ -271,8 +292,9 @@ def _rms(r):
 def fit_reference(p_mm: np.ndarray, q: np.ndarray, noise: Noise | None = None,
                   extra: dict | None = None, gp: bool = True) -> Reference:
     """Fit every candidate by FOLDS-fold CV, pick the lowest CV mean square (both outputs), refit
-    it to every mark. ``extra``: name -> (predict p_mm -> q, held-out residuals (m, 2)) for
-    candidates scored elsewhere (the MLP)."""
+    it to every mark. ``extra``: name -> (predict p_mm -> q, held-out positions (m, 2) mm, their
+    residuals (m, 2)) for candidates scored elsewhere (the MLP): each residual stays paired with
+    its own mark, whichever candidate wins."""
     p_mm = np.asarray(p_mm, dtype=np.float64)
     q = np.asarray(q, dtype=np.float64)
     n = len(p_mm)
@@ -283,14 +305,15 @@ def fit_reference(p_mm: np.ndarray, q: np.ndarray, noise: Noise | None = None,
         noise = repeated_noise(p_mm, q)
     use_gp = gp and n <= GP_MAX_MARKS
     known = None if noise is None else noise.variance
-    if use_gp:
+    if use_gp or (gp and noise is None):  # the kernels' fit is bounded (GP_HYPER_MARKS): it estimates the noise at any size
         a0, *_ = np.linalg.lstsq(_poly_features(x, 1), q, rcond=None)
         kernels = gp_kernels(x, q - _poly_features(x, 1) @ a0, known)
-    if noise is None and use_gp:
+    if noise is None and gp:
         white = np.array([float(k.k2.noise_level) for k in kernels])
-        noise = Noise(white, 3 * np.sqrt(white), "estimated: the Gaussian process's fitted white noise")
+        noise = Noise(white, 3 * np.sqrt(white), f"estimated: the Gaussian process's fitted white noise "
+                                                 f"({min(n, GP_HYPER_MARKS)} marks)")
     elif noise is None:
-        noise = Noise(np.zeros(2), np.zeros(2), "unknown (too many marks for the GP's estimate): taken as 0")
+        noise = Noise(np.zeros(2), np.zeros(2), "unknown (the GP's estimate not asked): taken as 0")
     fits: dict[str, Callable] = {}
     scores: dict[str, dict] = {}
     resid: dict[str, np.ndarray] = {}
@@ -316,8 +339,12 @@ def fit_reference(p_mm: np.ndarray, q: np.ndarray, noise: Noise | None = None,
             resid[name] = _cv(fit, x, q, folds)
         scores[name] = {"cv_rms": _rms(resid[name]).tolist(), "cv_max_abs": np.abs(resid[name]).max(0).tolist()}
     scores["rbf"]["smoothing"] = best_s
-    for name, (_, r) in (extra or {}).items():
-        resid[name] = np.asarray(r, dtype=np.float64)
+    where = {name: p_mm for name in resid}  # the marks each candidate's held-out residuals belong to
+    for name, (_, p_held, r) in (extra or {}).items():
+        resid[name] = np.asarray(r, dtype=np.float64).reshape(-1, 2)
+        where[name] = np.asarray(p_held, dtype=np.float64).reshape(-1, 2)
+        if len(where[name]) != len(resid[name]):
+            raise ValueError(f"{name}: {len(resid[name])} residuals for {len(where[name])} positions")
         scores[name] = {"cv_rms": _rms(resid[name]).tolist(), "cv_max_abs": np.abs(resid[name]).max(0).tolist(),
                         "scored_on": f"{len(resid[name])} held-out rows (not CV: trained once)"}
     chosen = min(resid, key=lambda k: float((resid[k] ** 2).mean()))
@@ -329,7 +356,7 @@ def fit_reference(p_mm: np.ndarray, q: np.ndarray, noise: Noise | None = None,
         ext = extra[chosen][0]
         pr = lambda xq: ext(xq * scale.h + scale.c) - _poly_features(xq, 1) @ a  # noqa: E731
     ms = (r ** 2).mean(0)
-    se = (r ** 2).std(0) / np.sqrt(n)  # standard error of the CV mean square: few marks, wide margin
+    se = (r ** 2).std(0) / np.sqrt(len(r))  # standard error of the CV mean square: few marks, wide margin
     est_rms = np.sqrt(np.maximum(ms - noise.variance + MS_MARGIN * se, RMS_FLOOR ** 2 * ms))
     detail = f"smoothing {best_s:g}" if chosen == "rbf" else ""
     hull = convex_hull(p_mm)
@@ -340,21 +367,23 @@ def fit_reference(p_mm: np.ndarray, q: np.ndarray, noise: Noise | None = None,
     ref.fields = bootstrap_fields(_refit(fits[boot], scale), x, ref(p_mm), ref, (p_mm.min(0), p_mm.max(0)),
                                   lambda pq: hull.inside(pq, 1e-6), noise,
                                   f"{BOOT} replicates of {boot}" + ("" if boot == chosen else f" (for {chosen})"))
-    add_unresolved(ref.fields, p_mm, r, noise, float(np.linalg.norm(np.ptp(hull.points, 0))))
+    add_unresolved(ref.fields, where[chosen], r, noise, float(np.linalg.norm(np.ptp(hull.points, 0))))
     ref.est_max = ref.fields.floors()
     return ref
 
 
 def _refit(fit: Callable, scale: "_Scaled") -> Callable:
     """fit (a candidate's residual fit) -> refit(x, q): the affine map and the candidate refitted
-    to readings q at scaled inputs x, as a predictor of positions in mm."""
+    to readings q (n, 2), or B replicates of them at once (n, 2, B), at scaled inputs x, as a
+    predictor of positions in mm. Every candidate is linear in the readings with its
+    hyperparameters fixed, so the replicates share one factorisation."""
     def refit(x, q):
-        a, *_ = np.linalg.lstsq(_poly_features(x, 1), q, rcond=None)
-        f = fit(x, q - _poly_features(x, 1) @ a)
+        a, *_ = np.linalg.lstsq(_poly_features(x, 1), _columns(q), rcond=None)
+        f = fit(x, q - (_poly_features(x, 1) @ a).reshape(q.shape))
 
         def predict(p_mm):
             xq = scale.x(p_mm)
-            return _poly_features(xq, 1) @ a + f(xq)
+            return (_poly_features(xq, 1) @ a).reshape(len(xq), *q.shape[1:]) + f(xq)
         return predict
     return refit
 
@@ -377,12 +406,13 @@ def scenario_noise(scn) -> Noise | None:
 
 def reference_for(scn, mlp=None) -> Reference:
     """The reference of a measured scenario, fitted to every distinct mark. ``mlp``: (predict
-    p_mm -> q, its residuals on held-out rows) of the scenario's trained MLP, a candidate."""
+    p_mm -> q, its held-out rows' positions, its residuals there) of the scenario's trained MLP,
+    a candidate."""
     import hashlib
 
     m = scn.mechanism
     extra = {"mlp": mlp} if mlp is not None else {}
-    key = (scn.fingerprint, hashlib.sha256(np.ascontiguousarray(mlp[1]).tobytes()).hexdigest() if mlp is not None else "")
+    key = (scn.fingerprint, hashlib.sha256(np.ascontiguousarray(mlp[2]).tobytes()).hexdigest() if mlp is not None else "")
     if key not in _CACHE:
         _CACHE.clear()
         p_rows, q_rows = m.rows

@@ -12,6 +12,7 @@ from nnik.machine.actuator import Actuator
 from nnik.emit.c_text import c_name_problem
 from nnik.errors import NnikError
 from nnik.machine.kinematics import KINDS, Mechanism, Workspace
+from nnik.machine.kinematics.measured import check_marks_for_network
 from nnik.machine.motion import validate_motion
 from nnik.machine.params import MAX_LENGTH_MM, Param, positive, validate_table
 
@@ -224,6 +225,7 @@ class Scenario:
             dataset["n_val"] = max(200, dataset["n_train"] // 4)
         network = validate_table(top["network"], NETWORK, source, "network")
         _check_training_memory(mechanism, dataset, network, source)
+        check_marks_for_network(mechanism, network, source)
         training = validate_table(top["training"], TRAINING, source, "training")
         export = validate_table(top["export"], EXPORT, source, "export")
         target = validate_table(top["target"], TARGET, source, "target")

@@ -6,6 +6,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from nnik.machine import ref_claim
 from nnik.machine.reference import Noise
@@ -78,7 +80,7 @@ def test_a_reference_that_cannot_be_refitted_borrows_the_best_refit():
     q = np.rint(truth(p))
     noise = known_noise(q, np.eye(2), reading_step=1.0)
     held = rng.uniform(0, 100, (40, 2))
-    ref = fit_reference(p, q, noise, extra={"mlp": (truth, truth(held) - np.rint(truth(held)))}, gp=False)
+    ref = fit_reference(p, q, noise, extra={"mlp": (truth, held, truth(held) - np.rint(truth(held)))}, gp=False)
     assert ref.name == "mlp"  # the outside model scored best (it is the truth)
     assert "(for mlp)" in ref.fields.method and ref.fields.fields.shape[0] == ref_claim.BOOT
     assert 0 < ref.error_max < 1.0
@@ -94,3 +96,52 @@ def test_the_claim_equals_the_brute_force_over_every_point():
     cells = ef._cells(p)
     brute = [float(np.abs(d + ef.at(b, p, cells)).max()) for b in range(12)]
     assert ef.claim(p, d) == pytest.approx(float(np.quantile(brute, ref_claim.LEVEL)))
+
+
+def test_an_outside_winner_keeps_each_residual_with_its_own_mark():
+    """issue 25: the MLP scored on fewer held-out rows than there are marks wins the CV while
+    its residuals hold a correlated error; the unresolved part pairs each residual with the mark
+    it was measured at (it was paired with all the marks and crashed)."""
+    from nnik.machine.reference import fit_reference, known_noise
+
+    rng = np.random.default_rng(6)
+    p = rng.uniform(0, 100, (160, 2))
+
+    def truth(pm):
+        return np.stack([3 * pm[:, 0] + 2 * np.sin(pm[:, 1] / 3), pm[:, 0] - 2 * pm[:, 1] + 2 * np.cos(pm[:, 0] / 3)], 1)
+
+    def mlp(pm):  # close to the truth, off by a smooth bias of 0.4 units
+        return truth(pm) + 0.4 * np.sin(pm / 30.0)
+    q = np.rint(truth(p))
+    noise = known_noise(q, np.eye(2), reading_step=1.0)
+    held = p[:40]  # the MLP's held-out rows are a quarter of the marks
+    ref = fit_reference(p, q, noise, extra={"mlp": (mlp, held, mlp(held) - q[:40])}, gp=False)
+    assert ref.name == "mlp"
+    assert "correlation length" in ref.fields.method  # the unresolved error was added
+    assert np.all(np.isfinite(ref.est_max)) and ref.error_max >= 0.4  # not better than the MLP truly is
+
+
+def test_an_outside_candidate_with_unpaired_residuals_is_refused():
+    from nnik.machine.reference import fit_reference
+
+    rng = np.random.default_rng(7)
+    p = rng.uniform(0, 100, (60, 2))
+    q = np.rint(p * [3.0, -2.0])
+    with pytest.raises(ValueError, match="30 residuals for 20 positions"):
+        fit_reference(p, q, None, extra={"mlp": (lambda pm: pm, p[:20], np.zeros((30, 2)))}, gp=False)
+
+
+@settings(max_examples=25, deadline=None)
+@given(seed=st.integers(0, 2**31), g=st.integers(3, 60), d_scale=st.sampled_from([0.0, 0.01, 0.1, 1.0]),
+       points=st.integers(1, 5000))
+def test_the_claim_is_the_brute_force_on_random_fields(seed, g, d_scale, points):
+    """The claim evaluates a few cells first and then only those that could beat them: the same
+    figure as every point evaluated, whatever the grid, the points and d's size against the fields'."""
+    rng = np.random.default_rng(seed)
+    f = rng.normal(0, 0.1, (8, g, g, 2)).astype(np.float32)
+    ef = ref_claim.ErrorFields(np.zeros(2), np.full(2, 10.0), f, np.ones((g, g), bool), "test")
+    p = rng.uniform(0, 10, (points, 2))
+    d = d_scale * np.sin(p[:, :1] * rng.uniform(0.1, 5) + np.array([0.0, 1.0])) + rng.normal(0, 0.01, (points, 2))
+    cells = ef._cells(p)
+    brute = [float(np.abs(d + ef.at(b, p, cells)).max()) for b in range(8)]
+    assert ef.claim(p, d) == float(np.quantile(brute, ref_claim.LEVEL))

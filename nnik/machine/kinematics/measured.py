@@ -8,11 +8,12 @@ from __future__ import annotations
 
 import csv
 import io
+import warnings
 from pathlib import Path
 
 import numpy as np
 
-from nnik.errors import NnikError
+from nnik.errors import NnikError, NnikWarning
 from nnik.machine.kinematics.base import Mechanism
 from nnik.machine.params import Param
 
@@ -114,6 +115,80 @@ def merge_duplicates(p_mm: np.ndarray, q: np.ndarray) -> tuple[np.ndarray, np.nd
     return p_mm[np.sort(first)], qm / counts[:, None], len(p_mm) - len(uniq)
 
 
+def drop_copies(p_mm: np.ndarray, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, int]:
+    """The rows without those that repeat an earlier row exactly, position and readings alike (a
+    copied row, or a mark read again that measured nothing new: its spread would pass for a
+    perfect instrument). Returns (positions, commands, copies dropped), in the file's order."""
+    rows = np.concatenate([p_mm, q], axis=1)
+    order = np.lexsort(rows.T[::-1])
+    same = np.all(rows[order][1:] == rows[order][:-1], axis=1)
+    if not same.any():  # the usual case, without np.unique's cost
+        return p_mm, q, 0
+    _, first = np.unique(rows, axis=0, return_index=True)
+    keep = np.sort(first)
+    return p_mm[keep], q[keep], len(rows) - len(keep)
+
+
+SPLIT_FRACTIONS = {"test": 0.25, "val": 0.15}  # of the distinct marks held out; the rest trains
+SPLIT_MIN = 5  # marks in each held-out split at least
+
+
+def split_sizes(n: int) -> dict[str, int]:
+    """How many of n distinct marks test, validate and train."""
+    n_test, n_val = (max(SPLIT_MIN, int(round(n * SPLIT_FRACTIONS[s]))) for s in ("test", "val"))
+    return {"test": n_test, "val": n_val, "train": n - n_test - n_val}
+
+
+FOLLOW_R2 = 0.5  # a quadratic in the position must explain at least this fraction of each reading's variance
+INDEPENDENT = 1e-3  # the affine map's smaller singular value at least this fraction of its larger one
+
+
+def check_readings(p_mm: np.ndarray, q: np.ndarray, src: str) -> None:
+    """Readings that cannot be a machine's inverse kinematics, refused: a column that never
+    changes, a column the position does not explain (a quadratic in x, y explains less than
+    FOLLOW_R2 of its variance: shuffled or unrelated columns), or two columns that move as one
+    (the head then reaches a line, not the rows' area)."""
+    for o, name in enumerate(COLUMNS[2:]):
+        if np.ptp(q[:, o]) == 0:
+            raise NnikError(f"{name} is {q[0, o]:g} on every row: the readings do not change with the position", src)
+    span = np.maximum(np.ptp(p_mm, axis=0), 1e-12)
+    x = (p_mm - p_mm.min(0)) / span * 2 - 1
+    feats = np.stack([np.ones(len(x)), x[:, 0], x[:, 1], x[:, 0] ** 2, x[:, 0] * x[:, 1], x[:, 1] ** 2], 1)
+    coef, *_ = np.linalg.lstsq(feats, q, rcond=None)
+    r2 = 1 - ((q - feats @ coef) ** 2).sum(0) / ((q - q.mean(0)) ** 2).sum(0)
+    for o, name in enumerate(COLUMNS[2:]):
+        if not r2[o] >= FOLLOW_R2:
+            raise NnikError(f"{name} does not follow the position: a smooth map of x_um, y_um explains only "
+                            f"{100 * max(r2[o], 0):.0f} % of its variance (need {100 * FOLLOW_R2:.0f} %); "
+                            "are the columns in the order x_um,y_um,q1,q2 and from the same marks?", src)
+    jac = coef[1:3] / np.sqrt((q - q.mean(0)) ** 2).mean(0)  # per output, normalised by its spread
+    sv = np.linalg.svd(jac, compute_uv=False)
+    if sv[1] < INDEPENDENT * sv[0]:
+        raise NnikError("q1 and q2 move together (one is a scaled copy of the other): two motors that reach an "
+                        "area move independently", src)
+
+
+def network_weights(hidden, n_in: int = 2, n_out: int = 2) -> int:
+    """The MLP's trainable parameters: each layer's weights and biases."""
+    widths = [n_in, *hidden, n_out]
+    return sum((a + 1) * b for a, b in zip(widths[:-1], widths[1:]))
+
+
+def check_marks_for_network(mechanism, network: dict, source: str) -> None:
+    """A measured machine's training rows hold two readings each; fewer readings than the
+    network has weights leave the fit underdetermined."""
+    if mechanism.analytic:
+        return
+    n = len(mechanism.positions_mm)
+    train = split_sizes(n)["train"]
+    weights = network_weights(network["hidden"])
+    if 2 * train < weights:
+        need = next(m for m in range(n, 100 * weights) if 2 * split_sizes(m)["train"] >= weights)
+        raise NnikError(f"hidden {list(network['hidden'])} has {weights} weights but the {n} distinct marks leave "
+                        f"{train} training rows, {2 * train} readings: measure at least {need} marks or use a "
+                        "smaller [network] hidden", source, "[network] hidden")
+
+
 def check_coverage(p_mm: np.ndarray, lo: np.ndarray, hi: np.ndarray, src: str) -> None:
     """Every cell of a coarse grid over the workspace must hold rows: a model fitted to a corner
     or a line of the workspace says nothing about the rest of it."""
@@ -161,12 +236,20 @@ class Measured(Mechanism):
                 f"row {i + 1} at ({p_mm[i, 0]:.3f}, {p_mm[i, 1]:.3f}) mm lies outside [workspace]",
                 str(self.csv_path),
             )
-        self.rows = (p_mm, q)  # as read, repeats included: their spread is a noise estimate
-        self.positions_mm, self.commands, self.duplicates_merged = merge_duplicates(p_mm, q)
+        # repeats kept, exact copies not: the repeats' spread is a noise estimate, a copy's is 0
+        p_rows, q_rows, self.copies = drop_copies(p_mm, q)
+        self.rows = (p_rows, q_rows)
+        self.positions_mm, self.commands, _ = merge_duplicates(p_rows, q_rows)
+        self.duplicates_merged = len(p_mm) - len(self.positions_mm)
         if len(self.positions_mm) < MIN_ROWS:
             raise NnikError(f"only {len(self.positions_mm)} distinct positions in {len(p_mm)} rows; need at least "
                             f"{MIN_ROWS}", str(self.csv_path))
         check_coverage(self.positions_mm, lo, hi, str(self.csv_path))
+        check_readings(self.positions_mm, self.commands, str(self.csv_path))
+        if self.copies:
+            warnings.warn(NnikWarning(
+                f"{self.csv_path}: {self.copies} of {len(p_mm)} rows repeat an earlier row exactly (position and "
+                "readings): each counted once, and left out of the noise estimate"), stacklevel=2)
 
     def forward(self, q):
         raise NnikError("a measured mechanism has no analytic forward model", self.source, "[mechanism] kind")
