@@ -14,17 +14,10 @@
 
 static uint32_t uabs32(int32_t v) { return v < 0 ? (uint32_t)0 - (uint32_t)v : (uint32_t)v; }
 
-/* floor(n * 2^30 / L) for 0 <= n <= L */
-static uint32_t q30_div(uint32_t n, uint32_t L)
-{
-    if (L < 0x10000UL) { /* two 32-bit long-division steps: 16 bits, then 14 */
-        uint32_t q = (n << 16) / L, r = (n << 16) % L;
-        return (q << 14) + (r << 14) / L;
-    }
-    return (uint32_t)(((uint64_t)n << 30) / L);
-}
-
 /* floor(a * L / n), n > 0 (an axis' limit on the block's acceleration) */
+#ifdef __GNUC__
+__attribute__((noinline))
+#endif
 static uint32_t acc_axis(uint32_t a, uint32_t L, uint32_t n)
 {
     if (L < 0x400UL && a < 0x400000UL) /* a * L < 2^32 */
@@ -52,25 +45,36 @@ uint8_t nnik_pl_ready(const nnik_plan_t *pl, uint8_t flushing)
     return pl->count == NNIK_PL_N || (flushing && pl->count);
 }
 
-/* the junction's speed limit between blocks a and b (b follows a) */
+/* the junction's speed limit between blocks a and b (b follows a): see nnik_plan.h */
 static uint32_t junction(const nnik_pl_block_t *a, const nnik_pl_block_t *b)
 {
-    int64_t dot = ((int64_t)a->u[0] * b->u[0] + (int64_t)a->u[1] * b->u[1]) >> 30;
-    uint32_t lim = a->vn < b->vn ? a->vn : b->vn, sn, r, acc;
-    uint64_t vj2;
-    if (dot <= -Q30)
+    int64_t dot = (((int64_t)a->u[0] * b->u[0] + (int64_t)a->u[1] * b->u[1]) >> 30) - NNIK_PL_DOT_MARGIN;
+    uint32_t lim = a->vn < b->vn ? a->vn : b->vn, sn, r, w[2], wn, aj;
+    uint64_t vj2 = 0;
+    uint8_t i;
+    if (dot <= -Q30 + NNIK_PL_REVERSAL)
         return 0; /* a reversal: stop */
-    if (dot > Q30)
-        dot = Q30;
+    if (dot >= Q30 - NNIK_PL_REVERSAL)
+        return lim; /* straight on */
     sn = nnik_isqrt64((uint64_t)(Q30 + dot) << 29);
-    if (sn >= (uint32_t)Q30)
+    r = acc_axis(sn, 0x10000UL, (uint32_t)Q30 - sn);
+    if (r > 0x7FFFFFFFUL)
         r = 0x7FFFFFFFUL;
-    else {
-        uint64_t t = ((uint64_t)sn << 16) / ((uint32_t)Q30 - sn);
-        r = t > 0x7FFFFFFFUL ? 0x7FFFFFFFUL : (uint32_t)t;
+    for (i = 0; i < 2; i++) { /* |w| from the components less their error, each over its own plus it */
+        int64_t d = (int64_t)b->u[i] - a->u[i];
+        uint32_t t;
+        w[i] = (uint32_t)(d < 0 ? -d : d);
+        t = w[i] > 4 ? w[i] - 4 : 0;
+        vj2 += (uint64_t)t * t;
     }
-    acc = a->acc < b->acc ? a->acc : b->acc;
-    vj2 = (uint64_t)acc * NNIK_GC_JDEV_UM * r;
+    wn = nnik_isqrt64(vj2);
+    aj = acc_axis(NNIK_GC_ACC_X, wn, w[0] + 4);
+    wn = acc_axis(NNIK_GC_ACC_Y, wn, w[1] + 4);
+    if (wn < aj)
+        aj = wn;
+    if (aj > 0x7FFFFFUL)
+        aj = 0x7FFFFFUL;
+    vj2 = (uint64_t)aj * NNIK_GC_JDEV_UM * r;
     if (vj2 >= (uint64_t)lim * lim)
         return lim;
     return nnik_isqrt64(vj2);
@@ -84,13 +88,15 @@ static void backward(nnik_plan_t *pl)
     for (k = (int8_t)pl->count - 2; k >= 0; k--) {
         nnik_pl_block_t *b = &pl->q[IDX(pl, k)];
         const nnik_pl_block_t *n = &pl->q[IDX(pl, k + 1)];
-        uint64_t t = (uint64_t)n->acc * n->len, e2;
+        uint64_t t = (uint64_t)n->acc * n->len + (((uint64_t)n->acc * n->lfr) >> 16), e2;
         uint32_t ex = b->jmax;
         if (t < (1ULL << 40)) {
             e2 = (uint64_t)n->exit * n->exit + (t << 17);
             if ((uint64_t)ex * ex > e2)
                 ex = nnik_isqrt64(e2);
         }
+        if (ex < (b->acc >> 2))
+            ex = 0; /* below the sampler's floor: a stop */
         if (ex == b->exit)
             return;
         b->exit = ex;
@@ -100,17 +106,26 @@ static void backward(nnik_plan_t *pl)
 void nnik_pl_push(nnik_plan_t *pl, int32_t x, int32_t y, int32_t feed, uint16_t tool)
 {
     int32_t dx = x - pl->last[0], dy = y - pl->last[1];
-    uint32_t ax = uabs32(dx), ay = uabs32(dy), L, acc = 0xFFFFFFFFUL, a;
+    uint32_t ax = uabs32(dx), ay = uabs32(dy), Lq, Lc, acc = 0xFFFFFFFFUL, a;
+    uint64_t m;
+    uint8_t f = 0;
     nnik_pl_block_t *b;
     if (!dx && !dy)
         return;
-    L = nnik_isqrt64((uint64_t)ax * ax + (uint64_t)ay * ay);
+    m = (uint64_t)ax * ax + (uint64_t)ay * ay;
+    while (m < (1ULL << 60)) { /* m = n 4^f in [2^60, 2^62): sqrt(n) 2^f to 31 bits */
+        m <<= 2;
+        f++;
+    }
+    Lq = nnik_isqrt64(m);
+    Lc = Lq + ((uint64_t)Lq * Lq != m); /* >= sqrt(n) 2^f: |u| <= 1 */
     b = &pl->q[IDX(pl, pl->count)];
     b->end[0] = x;
     b->end[1] = y;
-    b->len = L;
-    b->u[0] = (int32_t)q30_div(ax, L);
-    b->u[1] = (int32_t)q30_div(ay, L);
+    b->len = Lq >> f;
+    b->lfr = (uint16_t)(f >= 16 ? Lq >> (f - 16) : Lq << (16 - f));
+    b->u[0] = (int32_t)acc_axis(ax << f, Q30, Lc);
+    b->u[1] = (int32_t)acc_axis(ay << f, Q30, Lc);
     if (dx < 0)
         b->u[0] = -b->u[0];
     if (dy < 0)
@@ -122,13 +137,10 @@ void nnik_pl_push(nnik_plan_t *pl, int32_t x, int32_t y, int32_t feed, uint16_t 
         pl->feed_vn = (uint32_t)(((uint64_t)(uint32_t)feed << 16) / (60UL * NNIK_GC_SAMPLE_HZ));
     }
     b->vn = pl->feed_vn;
-    if (ax) {
-        a = acc_axis(NNIK_GC_ACC_X, L, ax);
-        if (a < acc)
-            acc = a;
-    }
+    if (ax)
+        acc = acc_axis(NNIK_GC_ACC_X, Lq, ax << f);
     if (ay) {
-        a = acc_axis(NNIK_GC_ACC_Y, L, ay);
+        a = acc_axis(NNIK_GC_ACC_Y, Lq, ay << f);
         if (a < acc)
             acc = a;
     }
@@ -140,8 +152,8 @@ void nnik_pl_push(nnik_plan_t *pl, int32_t x, int32_t y, int32_t feed, uint16_t 
     if (pl->count)
         pl->q[IDX(pl, pl->count - 1)].jmax = junction(&pl->q[IDX(pl, pl->count - 1)], b);
     else { /* the head, from rest at its start */
-        pl->r_um = L;
-        pl->r_fr = 0;
+        pl->r_um = b->len;
+        pl->r_fr = b->lfr;
     }
     pl->count++;
     pl->last[0] = x;
@@ -149,23 +161,50 @@ void nnik_pl_push(nnik_plan_t *pl, int32_t x, int32_t y, int32_t feed, uint16_t 
     backward(pl);
 }
 
-/* after moving c this sample, can the block still brake to its exit speed?  The remaining
- * distance rem = r_um + r_fr / 65536 um; d = floor((rem - c) / 65536) by 32-bit pieces. */
+/* rem <= c, rem = r_um + r_fr / 65536 um: the sample reaches the block's end */
+static uint8_t reaches(uint32_t c, uint32_t r_um, uint16_t r_fr)
+{
+    uint32_t ch = c >> 16;
+    if ((uint16_t)c > r_fr)
+        ch++; /* borrow: rem - c = (r_um - ch) * 65536 + (r_fr - c) mod 65536 */
+    return r_um < ch || (r_um == ch && (uint16_t)(r_fr - (uint16_t)c) == 0);
+}
+
+/* after moving c this sample (rem > c left), can the block still brake to its exit speed?
+ * d = floor((rem - c) / 65536) by 32-bit pieces. */
 static uint8_t can_brake(uint32_t c, uint32_t r_um, uint16_t r_fr, const nnik_pl_block_t *b)
 {
     uint32_t d, cq, eq, ch = c >> 16;
     if (c <= b->exit)
         return 1;
     if ((uint16_t)c > r_fr)
-        ch++; /* borrow: d = r_um - ch, rem - c = d * 65536 + (r_fr - c) mod 65536 */
-    if (r_um < ch || (r_um == ch && (uint16_t)(r_fr - (uint16_t)c) == 0))
-        return 0; /* rem <= c */
+        ch++;
     d = r_um - ch;
     if (d > b->dbig) /* 2 acc d > 2^32 - 1 > any 4 ceil(c / 512)^2 */
         return 1;
     cq = (c + 511) >> 9;
     eq = b->exit >> 9;
     return 2 * b->acc * d >= 4 * (cq * cq - eq * eq);
+}
+
+/* may the sample go at c?  Each block end it reaches it passes at most at that block's exit
+ * (never a stop's), and the block it ends in can still brake to its exit. */
+static uint8_t can_go(const nnik_plan_t *pl, uint32_t c)
+{
+    const nnik_pl_block_t *b = &pl->q[pl->head];
+    uint32_t r_um = pl->r_um;
+    uint16_t r_fr = pl->r_fr;
+    uint8_t k = 0;
+    while (reaches(c, r_um, r_fr)) {
+        uint32_t rem;
+        if (c > b->exit)
+            return 0;
+        b = &pl->q[IDX(pl, ++k)]; /* exit > 0: b is not the last block */
+        rem = (r_um << 16) + r_fr + b->lfr; /* rem <= c < 2^24 */
+        r_fr = (uint16_t)rem;
+        r_um = b->len + (rem >> 16);
+    }
+    return can_brake(c, r_um, r_fr, b);
 }
 
 /* floor(u * s / 2^30), |u| <= 2^30, s < 2^29, by 16-bit products (no 64-bit arithmetic) */
@@ -185,7 +224,7 @@ static int32_t mul_q30(int32_t u, uint32_t s)
 void nnik_pl_sample(nnik_plan_t *pl, nnik_pl_sample_t *out)
 {
     nnik_pl_block_t *b = &pl->q[pl->head];
-    uint32_t v = pl->v, c, fl, o, ch;
+    uint32_t v = pl->v, c, fl, o, ch, l16;
     uint8_t stop = 0;
     if (v < b->vn)
         c = v + b->acc < b->vn ? v + b->acc : b->vn;
@@ -193,25 +232,23 @@ void nnik_pl_sample(nnik_plan_t *pl, nnik_pl_sample_t *out)
         c = (v > b->acc && v - b->acc > b->vn) ? v - b->acc : b->vn;
     else
         c = v;
-    if (!can_brake(c, pl->r_um, pl->r_fr, b)) {
+    if (!can_go(pl, c)) {
         c = v < b->vn ? v : b->vn; /* hold (not at rest: the sample must move) */
-        if (!c || !can_brake(c, pl->r_um, pl->r_fr, b)) {
-            fl = b->exit;
-            if (fl < (b->acc >> 2))
-                fl = b->acc >> 2;
+        if (!c || !can_go(pl, c)) {
+            fl = b->acc >> 2;
             if (fl < 1)
                 fl = 1;
             c = v > b->acc ? v - b->acc : 0;
+            if (c < b->exit && b->exit < v && can_go(pl, b->exit))
+                c = b->exit; /* down to the exit if it may go at it */
             if (c < fl)
                 c = fl;
         }
     }
     out->v = c;
     /* rem -= c; past the end: o = c - rem carries into the next blocks */
-    ch = c >> 16;
-    if ((uint16_t)c > pl->r_fr)
-        ch++;
-    if (pl->r_um > ch || (pl->r_um == ch && (uint16_t)(pl->r_fr - (uint16_t)c) != 0)) {
+    if (!reaches(c, pl->r_um, pl->r_fr)) {
+        ch = (c >> 16) + ((uint16_t)c > pl->r_fr);
         pl->r_um -= ch;
         pl->r_fr = (uint16_t)(pl->r_fr - (uint16_t)c);
     } else {
@@ -225,17 +262,17 @@ void nnik_pl_sample(nnik_plan_t *pl, nnik_pl_sample_t *out)
                 stop = 1;
                 c = 0;
                 pl->r_um = pl->q[pl->head].len; /* the next block (if any) starts from its start */
-                pl->r_fr = 0;
+                pl->r_fr = pl->q[pl->head].lfr;
                 break;
             }
             b = &pl->q[pl->head];
-            if (b->len >= 256 || o < (b->len << 16)) { /* o < 2^24: a block of 256 um or more holds it */
-                uint32_t r = (b->len << 16) - o; /* the low 32 bits: r_fr, and r_um by parts */
-                pl->r_fr = (uint16_t)r;
-                pl->r_um = b->len - (o >> 16) - ((uint16_t)o != 0);
+            l16 = (b->len << 16) | b->lfr; /* its length, Q16 (the low 32 bits) */
+            if (b->len >= 256 || o < l16) { /* o < 2^24: a block of 256 um or more holds it */
+                pl->r_fr = (uint16_t)(b->lfr - (uint16_t)o); /* rem = length - o, by parts */
+                pl->r_um = b->len - (o >> 16) - ((uint16_t)o > b->lfr);
                 break;
             }
-            o -= b->len << 16;
+            o -= l16;
         }
     }
     pl->v = c;
@@ -245,7 +282,7 @@ void nnik_pl_sample(nnik_plan_t *pl, nnik_pl_sample_t *out)
         out->p[0] = b->end[0];
         out->p[1] = b->end[1];
     } else {
-        uint32_t s_um = b->len - pl->r_um - (pl->r_fr != 0); /* floor(L - rem) */
+        uint32_t s_um = b->len - pl->r_um - (pl->r_fr > b->lfr); /* floor(length - rem) */
         out->p[0] = pl->start[0] + mul_q30(b->u[0], s_um);
         out->p[1] = pl->start[1] + mul_q30(b->u[1], s_um);
     }

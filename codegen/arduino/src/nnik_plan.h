@@ -6,21 +6,30 @@
  * is 1 / NNIK_GC_SAMPLE_HZ s.  Speeds are Q16 micrometres per sample (v = um/sample * 65536),
  * accelerations Q16 micrometres per sample squared, unit vectors Q30.
  *
- * Blocks.  A G-code line is one block, an arc chord is one block.  A block holds its end point,
- * its floor length L = isqrt(dx^2 + dy^2), its unit vector u = trunc(d * 2^30 / L) per axis, its
- * nominal speed vn = floor(min(F, NNIK_GC_MAX_FEED_UM_MIN) * 65536 / (60 * SAMPLE_HZ)) and its
- * acceleration acc = min over the moving axes of floor(a_axis * L / |d_axis|) (a_axis / |u_axis|).
+ * Blocks.  A G-code line is one block, an arc chord is one block.  With n = dx^2 + dy^2 and f the
+ * count of 2-bit shifts that brings m = n 4^f into [2^60, 2^62): Lq = isqrt(m) (sqrt(n) 2^f, 31
+ * bits), Lc = Lq, plus 1 when Lq^2 != m.  A block holds its end point, its length
+ * floor(sqrt(n) 2^16) as len (um) and lfr (Q16 fraction; lfr = Lq >> (f - 16), or Lq << (16 - f)
+ * when f < 16), its unit vector u = trunc((|d| 2^f) 2^30 / Lc) per axis with d's sign (so
+ * |u| <= 1 and the distance along it is the path's own), its nominal speed
+ * vn = floor(min(F, NNIK_GC_MAX_FEED_UM_MIN) * 65536 / (60 * SAMPLE_HZ)) and its acceleration
+ * acc = min over the moving axes of floor(a_axis * Lq / (|d_axis| 2^f)) (a_axis / |u_axis|, grbl's
+ * block acceleration, rounded down).
  *
  * Lookahead.  The queue holds NNIK_PL_N blocks.  When a block arrives, the junction with the
- * block before it gets its speed limit (grbl's junction deviation, all in integers):
- *     dot = (u1x u2x + u1y u2y) >> 30 (floor), sin(theta/2) = isqrt((2^30 + dot) << 29) (Q30),
- *     r = min(floor(sin * 2^16 / (2^30 - sin)), 2^31 - 1) (2^31 - 1 when sin = 2^30),
- *     vj^2 = min(acc1, acc2) * JDEV_UM * r (Q32), jmax = min(vn1, vn2, isqrt(vj^2)),
+ * block before it gets its speed limit (grbl 1.1's junction deviation, every rounding downward):
+ *     dot = ((u1x u2x + u1y u2y) >> 30) - NNIK_PL_DOT_MARGIN (at most the exact cosine: each u
+ *     component is within 2 of the exact one); dot <= -2^30 + NNIK_PL_REVERSAL (grbl's cosine
+ *     0.999999): a reversal, 0; dot >= 2^30 - NNIK_PL_REVERSAL: straight on, min(vn1, vn2);
+ *     sin(theta/2) = isqrt((2^30 + dot) << 29) (Q30), r = min(floor(sin * 2^16 / (2^30 - sin)), 2^31 - 1);
+ *     the junction's acceleration (grbl: the axis limit along w = u2 - u1) from w less its error:
+ *     |w| = isqrt(sum max(|w_i| - 4, 0)^2), aj = min(min_i floor(a_i |w| / (|w_i| + 4)), 2^23 - 1);
+ *     vj^2 = aj * JDEV_UM * r (Q32), jmax = min(vn1, vn2, isqrt(vj^2)),
  * and a backward pass sets every exit speed: the last block's exit is 0, and going back
- *     exit_i = min(jmax_i, isqrt(exit_{i+1}^2 + (acc_{i+1} * L_{i+1} << 17)))
- * (jmax_i itself when acc * L >= 2^40 or jmax^2 <= the sum; the pass stops where an exit does
- * not change).  There is no forward pass: the sampler below never changes speed by more than acc
- * per sample, which is what a forward pass would plan.
+ *     exit_i = min(jmax_i, isqrt(exit_{i+1}^2 + (t << 17))), t = acc_{i+1} len_{i+1} + (acc_{i+1} lfr_{i+1} >> 16)
+ * (jmax_i itself when t >= 2^40 or jmax^2 <= the sum); an exit below acc_i >> 2 (the sampler's
+ * floor) becomes 0, a stop; the pass stops where an exit does not change.  There is no forward
+ * pass: the sampler below never changes speed by more than acc per sample.
  *
  * Determinism.  The sampler runs only on blocks whose exit speed is final: while the queue is
  * full (it runs until the head block has been left behind, then the parser adds the next block)
@@ -28,15 +37,16 @@
  * until the last block ends at rest).  What it produces therefore depends only on the order of
  * the blocks and flushes, never on serial timing, and the Python model repeats it exactly.
  *
- * Sampling.  The state is the head block, the distance s along it (Q16 um) and the speed v.  Each
- * sample picks the first of these speeds that can still brake to the block's exit speed ve after
- * moving one sample: up = v + acc (at most vn; above vn: v - acc, at least vn), hold = min(v, vn)
- * (not when 0);
- * else down = max(v - acc, ve, acc >> 2, 1).  "Can brake" for a speed c with rem = L - s:
- *     c <= ve, or rem > c and 2 acc d >= 4 (ceil(c / 512)^2 - floor(ve / 512)^2), d = (rem - c) >> 16
- * (speeds below 2^24, 256 um per sample, so every product fits 32 bits)
- * (d in whole um; when d > floor((2^32 - 1) / (2 acc)), kept per block, it passes without the
- * product).  Then s += v; at
+ * Sampling.  The state is the head block, the distance s along it (Q16 um; rem = its length - s)
+ * and the speed v.  Each sample takes the first of these speeds that "may go": up = v + acc (at
+ * most vn; above vn: v - acc, at least vn), then hold = min(v, vn) (not when 0); else
+ * down = v - acc (0 below acc), or the exit ve when v - acc < ve < v and ve may go, and at least
+ * max(acc >> 2, 1).  A speed c may go when every block end it reaches (rem <= c, adding the next
+ * block's length to rem each time) it passes at most at that block's exit (never a stop's, exit
+ * 0), and the block it ends in can still brake: c <= ve, or
+ *     2 acc d >= 4 (ceil(c / 512)^2 - floor(ve / 512)^2), d = (rem - c) >> 16
+ * (speeds below 2^24, 256 um per sample, so every product fits 32 bits; d in whole um; when
+ * d > floor((2^32 - 1) / (2 acc)), kept per block, it passes without the product).  Then s += c; at
  * or past the end of a block with exit 0 the sample lands exactly on its end and v = 0 (a stop);
  * past the end of any other block the remainder carries into the next.  The point is
  * start + ((u * floor(s / 65536)) >> 30) per axis (arithmetic shift: floor), or the end point.
@@ -55,11 +65,14 @@ extern "C" {
 #ifndef NNIK_PL_N
 #define NNIK_PL_N 8 /* blocks of lookahead */
 #endif
+#define NNIK_PL_DOT_MARGIN 8 /* Q30: the unit vectors' dot product less this is at most the exact cosine */
+#define NNIK_PL_REVERSAL 1073 /* Q30: a dot product within this of -1 is a reversal (grbl: 0.999999) */
 
 typedef struct {
     int32_t end[2];  /* um */
     int32_t u[2];    /* Q30 */
     uint32_t len;    /* um, floor */
+    uint16_t lfr;    /* the length's fraction, Q16 (length = len + lfr / 65536 um, floor) */
     uint32_t vn;     /* nominal speed, Q16 um/sample */
     uint32_t acc;    /* Q16 um/sample^2 */
     uint32_t dbig;   /* floor((2^32 - 1) / (2 acc)): the brake test's product fits 32 bits below it */

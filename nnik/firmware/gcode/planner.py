@@ -3,9 +3,11 @@ codegen/arduino/src/nnik_plan.c (its header states every rule and rounding; in s
 
 * units: um (machine frame less the work origin), speeds Q16 um/sample, accelerations Q16
   um/sample^2, unit vectors Q30; a block is a line or an arc chord;
-* lookahead: grbl's junction deviation at each junction, a backward pass for the exit speeds,
-  the last queued block ending at rest; the sampler changes speed by at most the block's
-  acceleration per sample (the forward pass is implicit);
+* lookahead: grbl 1.1's junction deviation (the junction vector's axis limit) at each junction,
+  rounded downward, a backward pass for the exit speeds, the last queued block ending at rest;
+  the sampler changes speed by at most the block's acceleration per sample (the forward pass is
+  implicit) and passes a block end only at most at its exit, able to brake in the block it
+  lands in (nnik.bench.planner_oracle is the float grbl planner it is checked against);
 * determinism: samples are taken only while the queue is full (until the head block is left
   behind) or flushed (until it is empty), so they depend on the block order alone.
 
@@ -37,29 +39,47 @@ class Block:
     acc: int
     tool: int
     index: int  # the push's index in the job (its move is the interpreter's)
+    lfr: int = 0  # the length's fraction, Q16: the length is len + lfr / 65536 um (floor)
     jmax: int = 0
     exit: int = 0
 
+    @property
+    def l16(self) -> int:
+        """The length, Q16 um."""
+        return (self.len << 16) | self.lfr
 
-def _trunc_q30(n: int, L: int) -> int:
-    q = (abs(n) << 30) // L
-    return -q if n < 0 else q
+
+DOT_MARGIN = 8  # nnik_plan.h NNIK_PL_DOT_MARGIN
+REVERSAL = 1073  # NNIK_PL_REVERSAL
 
 
 def _acc_axis(a: int, L: int, n: int) -> int:
     return min(a * L // n, U32)
 
 
+def length_q(dx: int, dy: int) -> tuple[int, int, int]:
+    """(Lq, Lc, f): Lq = floor(sqrt(n) 2^f) with n 4^f in [2^60, 2^62), Lc = ceil of the same."""
+    m, f = dx * dx + dy * dy, 0
+    while m < 1 << 60:
+        m, f = m << 2, f + 1
+    Lq = isqrt(m)
+    return Lq, Lq + (Lq * Lq != m), f
+
+
 def junction(a: Block, b: Block, cfg: MachineConfig) -> int:
     """The speed limit at the junction a -> b (nnik_plan.c junction())."""
-    dot = (a.u[0] * b.u[0] + a.u[1] * b.u[1]) >> 30
+    dot = ((a.u[0] * b.u[0] + a.u[1] * b.u[1]) >> 30) - DOT_MARGIN
     lim = min(a.vn, b.vn)
-    if dot <= -Q30:
-        return 0
-    dot = min(dot, Q30)
+    if dot <= -Q30 + REVERSAL:
+        return 0  # a reversal
+    if dot >= Q30 - REVERSAL:
+        return lim  # straight on
     sn = isqrt((Q30 + dot) << 29)
-    r = R_MAX if sn >= Q30 else min((sn << 16) // (Q30 - sn), R_MAX)
-    vj2 = min(a.acc, b.acc) * cfg.junction_dev_um * r
+    r = min((sn << 16) // (Q30 - sn), R_MAX)
+    w = [abs(b.u[i] - a.u[i]) for i in range(2)]
+    wn = isqrt(sum(max(c - 4, 0) ** 2 for c in w))
+    aj = min(min(_acc_axis(acc, wn, c + 4) for acc, c in zip(cfg.acc_q16, w)), 0x7FFFFF)
+    vj2 = aj * cfg.junction_dev_um * r
     return lim if vj2 >= lim * lim else isqrt(vj2)
 
 
@@ -86,14 +106,16 @@ class Planner:
         dx, dy = x - self.last[0], y - self.last[1]
         if not dx and not dy:
             return
-        L = isqrt(dx * dx + dy * dy)
+        Lq, Lc, f = length_q(dx, dy)
         feed = min(feed, self.cfg.max_feed_um_min)
         vn = (feed << 16) // (60 * self.cfg.sample_hz)
         acc = U32
         for a, d in zip(self.acc, (dx, dy)):
             if d:
-                acc = min(acc, _acc_axis(a, L, abs(d)))
-        b = Block((x, y), (_trunc_q30(dx, L), _trunc_q30(dy, L)), L, vn, acc, tool, index)
+                acc = min(acc, _acc_axis(a, Lq, abs(d) << f))
+        u = tuple((abs(d) << (30 + f)) // Lc * (-1 if d < 0 else 1) for d in (dx, dy))
+        lfr = (Lq >> (f - 16) if f >= 16 else Lq << (16 - f)) & 0xFFFF
+        b = Block((x, y), u, Lq >> f, vn, acc, tool, index, lfr)
         if self.q:
             self.q[-1].jmax = junction(self.q[-1], b, self.cfg)
         self.q.append(b)
@@ -105,11 +127,13 @@ class Planner:
         q[-1].exit = 0
         for k in range(len(q) - 2, -1, -1):
             b, n = q[k], q[k + 1]
-            t, ex = n.acc * n.len, b.jmax
+            t, ex = n.acc * n.len + ((n.acc * n.lfr) >> 16), b.jmax
             if t < 1 << 40:
                 e2 = n.exit * n.exit + (t << 17)
                 if ex * ex > e2:
                     ex = isqrt(e2)
+            if ex < b.acc >> 2:
+                ex = 0  # below the sampler's floor: a stop
             if ex == b.exit:
                 return
             b.exit = ex
@@ -126,32 +150,45 @@ class Planner:
         cq, eq = (c + 511) >> 9, ve >> 9
         return 2 * acc * d >= 4 * (cq * cq - eq * eq)
 
+    def can_go(self, c: int, rem: int) -> bool:
+        """nnik_plan.c can_go: each block end the sample reaches (rem <= c) it passes at most at
+        that block's exit (never a stop's), and the block it ends in can still brake."""
+        q, k = self.q, 0
+        while rem <= c:
+            if c > q[k].exit:
+                return False
+            k += 1
+            rem += q[k].l16
+        return self._can_brake(c, rem, q[k].exit, q[k].acc)
+
     def sample(self) -> tuple[tuple[int, int], int, int, int, int]:
         """One sample: (point, speed used, its block's vn, tool word, push index)."""
         b = self.q[0]
         s, v = self.s, self.v
-        rem = (b.len << 16) - s
+        rem = b.l16 - s
         if v < b.vn:
             c = min(v + b.acc, b.vn)
         elif v > b.vn:
             c = v - b.acc if (v > b.acc and v - b.acc > b.vn) else b.vn
         else:
             c = v
-        if not self._can_brake(c, rem, b.exit, b.acc):
+        if not self.can_go(c, rem):
             c = min(v, b.vn)  # hold (not at rest: the sample must move)
-            if not c or not self._can_brake(c, rem, b.exit, b.acc):
-                fl = max(b.exit, b.acc >> 2, 1)
-                c = max(v - b.acc if v > b.acc else 0, fl)
+            if not c or not self.can_go(c, rem):
+                c = v - b.acc if v > b.acc else 0
+                if c < b.exit < v and self.can_go(b.exit, rem):
+                    c = b.exit  # down to the exit if it may go at it
+                c = max(c, b.acc >> 2, 1)
         used = c
         s += c
         stop = False
-        while s >= b.len << 16:
+        while s >= b.l16:
             self.start = b.end
             self.q.pop(0)
             if not b.exit or not self.q:
                 stop, s, c = True, 0, 0
                 break
-            s -= b.len << 16
+            s -= b.l16
             b = self.q[0]
         self.v, self.s = c, s
         if stop:

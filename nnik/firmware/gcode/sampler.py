@@ -65,7 +65,7 @@ def _drain(pl: Planner, flushing: bool, X: list, Y: list, V: list, B: list) -> N
     s, v = pl.s, pl.v
     while q and (flushing or len(q) == n):
         b = q[0]
-        L16, vn, acc, ex, idx = b.len << 16, b.vn, b.acc, b.exit, b.index
+        L16, vn, acc, ex, idx = b.l16, b.vn, b.acc, b.exit, b.index
         ux, uy = b.u
         sx, sy = pl.start
         while True:
@@ -88,21 +88,24 @@ def _drain(pl: Planner, flushing: bool, X: list, Y: list, V: list, B: list) -> N
                     B.extend([idx] * k)
                     s += k * c
                     continue
-            # the brake test (Planner._can_brake), then hold, then the floor
-            ok = True
-            if c > ex:
-                if rem <= c:
-                    ok = False
-                else:
+            # the brake test (Planner.can_go; inline while the sample stays in its block), then
+            # hold, then the floor
+            if rem <= c:
+                ok = pl.can_go(c, rem)
+            else:
+                ok = True
+                if c > ex:
                     d = (rem - c) >> 16
                     if d <= U32 // (2 * acc):
                         cq, eq = (c + 511) >> 9, ex >> 9
                         ok = 2 * acc * d >= 4 * (cq * cq - eq * eq)
             if not ok:
                 c = v if v < vn else vn
-                if not c or not _brakes(c, rem, ex, acc):
-                    fl = max(ex, acc >> 2, 1)
-                    c = max(v - acc if v > acc else 0, fl)
+                if not c or not pl.can_go(c, rem):
+                    c = v - acc if v > acc else 0
+                    if c < ex < v and pl.can_go(ex, rem):
+                        c = ex
+                    c = max(c, acc >> 2, 1)
             s += c
             if s < L16:
                 su = s >> 16
@@ -114,13 +117,13 @@ def _drain(pl: Planner, flushing: bool, X: list, Y: list, V: list, B: list) -> N
                 continue
             # the head block is left behind (Planner.sample's loop)
             used, stop = c, False
-            while s >= b.len << 16:
+            while s >= b.l16:
                 pl.start = b.end
                 q.pop(0)
                 if not b.exit or not q:
                     stop, s, c = True, 0, 0
                     break
-                s -= b.len << 16
+                s -= b.l16
                 b = q[0]
             v = c
             if stop:

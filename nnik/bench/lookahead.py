@@ -1,0 +1,89 @@
+"""`make bench`, the planner against the float grbl oracle (nnik.bench.planner_oracle; measured as
+nnik.bench.planner_compare states):
+
+* the lookahead's cost on short-chord jobs: a 5 mm radius circle in chords of 0.01-0.2 mm at
+  3000 mm/min, 1000 mm/s^2, for queues of 8, 15 and 16 blocks: the integer planner's job time
+  against the float planner with the same queue and with unlimited lookahead, and the float
+  planner's own finite / unlimited ratio;
+* the junction speed and acceleration ratios (integer / grbl's float limit) over random paths
+  with random limits (corners, chords, arcs, reversals), and the job-time ratio.
+Figures go to build/bench/lookahead.json too."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from nnik.bench import planner_oracle as oracle
+from nnik.bench.planner_compare import compare
+from nnik.bench.planner_paths import chord_ops, path_ops, random_pieces
+from nnik.firmware.config import MachineConfig
+
+OUT = Path("build") / "bench"
+CHORDS_UM = (10, 20, 50, 100, 150, 200)
+QUEUES = (8, 15, 16)
+
+
+def chord_table() -> list[dict]:
+    rows = []
+    for chord in CHORDS_UM:
+        for n in QUEUES:
+            cfg = MachineConfig(origin_um=(0, 0), plan_blocks=n)
+            ops = chord_ops(chord, 5000, 1.0, 3_000_000)
+            r = compare(ops, cfg)
+            t_inf = oracle.plan(ops, cfg, None).time_s
+            rows.append({"chord_um": chord, "blocks": n, "int_s": r["time_int_s"], "float_same_s": r["time_float_s"],
+                         "float_unlimited_s": t_inf, "int_vs_float_same": r["time_ratio"],
+                         "int_vs_unlimited": r["time_int_s"] / t_inf, "float_same_vs_unlimited": r["time_float_s"] / t_inf})
+    return rows
+
+
+def random_ratios(jobs: int, seed: int) -> dict:
+    J, A, T = [], [], []
+    for k in range(jobs):
+        rng = np.random.default_rng(seed + k)
+        hz = int(rng.choice([500, 1000, 2000]))
+        cfg = MachineConfig(origin_um=(0, 0), sample_hz=hz,
+                            accel_um_s2=tuple(int(rng.integers(100, 5000)) * 1000 for _ in range(2)),
+                            junction_dev_um=int(rng.integers(1, 100)), plan_blocks=int(rng.integers(2, 17)),
+                            max_feed_um_min=min(int(rng.integers(600, 9000)), ((1 << 24) - 1) * 60 * hz // 65536 // 1000) * 1000)
+        r = compare(path_ops(random_pieces(rng), cfg.max_feed_um_min), cfg)
+        J.append(r["junction"])
+        A.append(r["accel"])
+        T.append(r["time_ratio"])
+    j, a = np.concatenate(J), np.concatenate(A)
+    moving = j[j > 0]
+    q = lambda x, p: float(np.percentile(x, p)) if x.size else 0.0  # noqa: E731
+    return {"jobs": jobs, "junctions": int(j.size), "junction_max": float(j.max()), "junction_median": q(moving, 50),
+            "junction_p99": q(j, 99), "junctions_above_limit": int((j > 1.0).sum()), "accel_max": float(a.max()),
+            "accel_p99": q(a, 99), "samples_above_accel": int((a > 1.0).sum()),
+            "time_ratio_min": float(min(T)), "time_ratio_median": float(np.median(T)), "time_ratio_max": float(max(T))}
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(prog="python -m nnik.bench.lookahead", description=__doc__.split("\n")[0])
+    ap.add_argument("--jobs", type=int, default=20, help="random paths for the ratio distribution")
+    ap.add_argument("--seed", type=int, default=0)
+    args = ap.parse_args(argv)
+    rows = chord_table()
+    print("lookahead on a 5 mm circle in chords (3000 mm/min, 1000 mm/s^2): job time ratios")
+    print(f"  {'chord':>6} {'blocks':>6} {'int/float same N':>17} {'int/unlimited':>14} {'float N/unlimited':>18}")
+    for r in rows:
+        print(f"  {r['chord_um']:>4}um {r['blocks']:>6} {r['int_vs_float_same']:>17.4f} {r['int_vs_unlimited']:>14.4f}"
+              f" {r['float_same_vs_unlimited']:>18.4f}")
+    rr = random_ratios(args.jobs, args.seed)
+    print(f"random paths ({rr['jobs']} jobs, {rr['junctions']} junctions): junction / grbl limit max {rr['junction_max']:.4f}, "
+          f"median {rr['junction_median']:.4f} ({rr['junctions_above_limit']} above 1); accel / limit max {rr['accel_max']:.4f} "
+          f"({rr['samples_above_accel']} above 1); job time / float (same N) {rr['time_ratio_min']:.4f}.."
+          f"{rr['time_ratio_max']:.4f}, median {rr['time_ratio_median']:.4f}")
+    OUT.mkdir(parents=True, exist_ok=True)
+    (OUT / "lookahead.json").write_text(json.dumps({"chords": rows, "random": rr}, indent=2) + "\n")
+    return 1 if rr["junctions_above_limit"] or rr["samples_above_accel"] else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

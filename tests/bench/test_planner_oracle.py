@@ -1,0 +1,84 @@
+"""The firmware's integer planner (nnik/firmware/gcode/planner.py, bit for bit nnik_plan.c) against
+the float grbl 1.1 oracle (nnik/bench/planner_oracle.py) on random paths with random limits:
+corners, CAM chords of 0.01-0.2 mm, arcs and reversals. Measured as nnik/bench/planner_compare.py
+states: the speed of the sample that passes each junction, the speed change per sample against
+the block's acceleration, and the job's time."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+from hypothesis import HealthCheck, given, note, settings
+from hypothesis import strategies as st
+
+from nnik.bench import planner_oracle as oracle
+from nnik.bench.planner_compare import compare
+from nnik.bench.planner_paths import path_ops
+from nnik.firmware.config import MachineConfig
+
+piece = st.one_of(
+    st.tuples(st.just("line"), st.floats(20, 5000), st.floats(-180, 180)),  # a corner, then a line
+    st.tuples(st.just("arc"), st.floats(200, 20000), st.floats(-360, 360), st.floats(10, 200)),  # chords
+    st.tuples(st.just("rev"), st.floats(10, 3000)),  # a reversal
+    st.tuples(st.just("line"), st.floats(10, 200), st.floats(-10, 10)),  # a short, nearly straight line
+)
+limits = st.fixed_dictionaries({
+    "accel_um_s2": st.tuples(st.integers(100, 10000), st.integers(100, 10000)).map(lambda a: (a[0] * 1000, a[1] * 1000)),
+    "junction_dev_um": st.integers(1, 200),
+    "max_feed_um_min": st.integers(600, 9000).map(lambda f: f * 1000),
+    "plan_blocks": st.integers(2, 16),
+    "sample_hz": st.sampled_from([500, 1000, 2000]),
+})
+
+
+def machine(lim: dict) -> MachineConfig:
+    hz = lim["sample_hz"]
+    feed = min(lim["max_feed_um_min"], ((1 << 24) - 1) * 60 * hz // 65536 // 1000 * 1000)  # < 256 um/sample
+    acc = tuple(min(max(a, (16 * hz * hz + 65535) // 65536 * 1000), ((1 << 22) - 1) * hz * hz // 65536) for a in lim["accel_um_s2"])
+    return MachineConfig(origin_um=(0, 0), **{**lim, "max_feed_um_min": feed, "accel_um_s2": acc})
+
+
+@settings(max_examples=60, deadline=None, database=None, suppress_health_check=list(HealthCheck))
+@given(pieces=st.lists(piece, min_size=1, max_size=20), lim=limits, feed_share=st.floats(0.2, 1.0))
+def test_no_junction_and_no_acceleration_above_grbls_limits(pieces, lim, feed_share):
+    """Every junction speed <= grbl's float limit and every speed change <= the block's
+    acceleration (each axis within its own): rounding only ever makes a limit more conservative."""
+    cfg = machine(lim)
+    ops = path_ops(pieces, max(1000, int(cfg.max_feed_um_min * feed_share)))
+    note(repr(cfg))
+    r = compare(ops, cfg)
+    assert r["junction"].size == 0 or r["junction"].max() <= 1.0 + 1e-12, r["junction"].max()
+    assert r["accel"].size == 0 or r["accel"].max() <= 1.0 + 1e-12, r["accel"].max()
+
+
+@pytest.mark.xfail(reason="measured 1.03-1.10 on random paths (1.14 on 0.01 mm chords): a sample that enters "
+                          "a block must be able to brake there from where it lands (up to one sample's travel "
+                          "in), which the float planner's continuous entry does not pay", strict=False)
+@settings(max_examples=30, deadline=None, database=None, suppress_health_check=list(HealthCheck))
+@given(pieces=st.lists(piece, min_size=1, max_size=20), lim=limits)
+def test_job_time_within_2_percent_of_the_float_planner(pieces, lim):
+    cfg = machine(lim)
+    r = compare(path_ops(pieces, cfg.max_feed_um_min), cfg)
+    assert r["time_ratio"] <= 1.02, r["time_ratio"]
+
+
+def test_oracle_junction_rule_by_hand():
+    """A 90 degree corner on equal axes: the junction vector is 45 degrees, a_j = a sqrt(2),
+    sin(theta/2) = sin(45 deg); reversals stop; straight on is the feed."""
+    a, d = 1e6, 10.0
+    s = math.sin(math.pi / 4)
+    want = math.sqrt(a * math.sqrt(2) * d * s / (1 - s))
+    assert oracle.junction_limit((1, 0), (0, 1), 1e9, 1e9, (a, a), d) == pytest.approx(want)
+    assert oracle.junction_limit((1, 0), (-1, 0), 1e9, 1e9, (a, a), d) == 0.0
+    assert oracle.junction_limit((1, 0), (1, 0), 5e4, 4e4, (a, a), d) == 4e4
+
+
+def test_oracle_trapezoid_and_lookahead():
+    """A lone 100 mm line at 1000 mm/s^2 to 50 mm/s: 2.05 s; a chain of short chords plans slower
+    with 2 blocks than unlimited, and 16 blocks in between."""
+    cfg = MachineConfig(origin_um=(0, 0))
+    assert oracle.plan([("push", 100000, 0, 3_000_000, 0, 0), ("flush",)], cfg).time_s == pytest.approx(2.05)
+    ops = path_ops([("arc", 5000.0, 180.0, 20.0)], 3_000_000)
+    t2, t16, tinf = (oracle.plan(ops, cfg, n).time_s for n in (2, 16, None))
+    assert t2 > t16 > tinf
