@@ -44,7 +44,7 @@ bench: setup toolchains
 	$(PYTHON) -m nnik.bench.lookahead
 	$(PYTHON) -m nnik.bench.seed003
 	$(PYTHON) -m nnik.bench.job_speed
-	$(PYTHON) -m nnik.bench.reproducible datasets/corexy_nonlinear.toml
+	$(PYTHON) -m nnik.bench.reproducible datasets/corexy_nonlinear.toml datasets/corexy_measured_2000.toml
 	$(PYTHON) -m nnik run datasets/corexy_nonlinear.toml > /dev/null && $(PYTHON) -m nnik.bench.builds build/galvo_cba2012 build/corexy_nonlinear
 	$(PYTHON) -m nnik.estimate sweep
 	$(PYTHON) -m nnik.estimate sweep --kernel fast --tanh '' --arch 4 --arch 6 --arch 8 --arch 10 --arch 12 --arch 16
