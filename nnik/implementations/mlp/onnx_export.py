@@ -19,6 +19,13 @@ ONNX_TOLERANCE = 1e-6  # normalised output units
 
 def export_onnx(model: TrainedModel, path: Path) -> None:
     """Write the network (normalised input -> standardised output); the scaling goes in metadata."""
+    from nnik.files.atomic_write import replacing
+
+    with replacing(path) as tmp:
+        _export_onnx(model, tmp)
+
+
+def _export_onnx(model: TrainedModel, path: Path) -> None:
     net = model.net.eval()
     dummy = torch.zeros(1, net.shape[0], dtype=torch.float64)
     with warnings.catch_warnings():

@@ -74,6 +74,12 @@ class TrainedModel:
         return s.base(xn) + s.out_mean + s.out_std * y
 
     def save(self, path: Path) -> None:
+        from nnik.files.atomic_write import replacing
+
+        with replacing(path) as tmp:
+            self._save(tmp)
+
+    def _save(self, path: Path) -> None:
         torch.save(
             {
                 "format": MODEL_FORMAT,
