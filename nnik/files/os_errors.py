@@ -17,6 +17,18 @@ HINTS = {
 }
 
 
+def os_error_behind(exc: BaseException) -> OSError | None:
+    """The OSError a library's own error was raised while handling (optuna's storage, for one,
+    ends a trial whose journal write failed with an AssertionError of its own)."""
+    seen = set()
+    while exc is not None and id(exc) not in seen:
+        if isinstance(exc, OSError):
+            return exc
+        seen.add(id(exc))
+        exc = exc.__cause__ or exc.__context__
+    return None
+
+
 def os_error_line(exc: OSError) -> str:
     """``PATH: what went wrong [ERRNO]; what to do`` for the one `nnik: error:` line."""
     name = errno.errorcode.get(exc.errno, "") if exc.errno is not None else ""

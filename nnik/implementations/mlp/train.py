@@ -74,12 +74,17 @@ class TrainedModel:
         return s.base(xn) + s.out_mean + s.out_std * y
 
     def save(self, path: Path) -> None:
-        from nnik.files.atomic_write import replacing
+        """Written whole or not at all (torch's own file writer turns a full disk into a
+        RuntimeError: the bytes are made in memory and written by nnik)."""
+        import io
 
-        with replacing(path) as tmp:
-            self._save(tmp)
+        from nnik.files.atomic_write import write_file_atomic
 
-    def _save(self, path: Path) -> None:
+        buf = io.BytesIO()
+        self._save(buf)
+        write_file_atomic(path, buf.getvalue())
+
+    def _save(self, path) -> None:
         torch.save(
             {
                 "format": MODEL_FORMAT,
