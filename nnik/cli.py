@@ -12,6 +12,7 @@ from rich.table import Table
 
 from nnik import pipeline
 from nnik.errors import NnikError
+from nnik.files.atomic_write import reraise_lost_interrupts
 from nnik.files.os_errors import os_error_line
 from nnik.files.outdir import check_model_dir, check_outdir, release_locks
 from nnik.report.console import console, print_accuracy, print_front, print_selection
@@ -417,6 +418,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
+    reraise_lost_interrupts()
     # numpy's RuntimeWarnings are held back: after an error the one error line is all that shows;
     # after success they follow the output, one line each, so nothing is lost.
     with warnings.catch_warnings(record=True) as caught:

@@ -152,16 +152,22 @@ def read_only(d: Path):
 
 
 # ---- a kill while it works -----------------------------------------------------------------------
-def kill_during(argv, sig: int, delay: float, cwd=None) -> str:
-    """Start `nnik argv`, send sig to its process group after delay s (unless it ended first)."""
+def kill_during(argv, sig: int, when, cwd=None, limit: float = 600) -> str:
+    """Start `nnik argv`; as soon as ``when()`` is true (e.g. a temporary file of an atomic write
+    exists: the command is in the middle of a write), send sig to its process group. Returns
+    "killed", or how it ended if it finished first."""
     e = {**os.environ, "PYTHONPATH": str(ROOT)}
     p = subprocess.Popen([sys.executable, "-m", "nnik", *map(str, argv)], stdout=subprocess.DEVNULL,
                          stderr=subprocess.PIPE, text=True, start_new_session=True, cwd=cwd, env=e)
     try:
-        rc = p.wait(timeout=delay)
-        return f"ended by itself (exit {rc})"
-    except subprocess.TimeoutExpired:
-        os.killpg(p.pid, sig)
+        t0 = time.monotonic()
+        while not when():
+            if p.poll() is not None:
+                return f"ended by itself (exit {p.returncode})"
+            assert time.monotonic() - t0 < limit, "the command never reached the point to kill it"
+            time.sleep(0.001)
+        with contextlib.suppress(ProcessLookupError):
+            os.killpg(p.pid, sig)
         try:
             p.wait(timeout=60)
         except subprocess.TimeoutExpired:

@@ -69,15 +69,18 @@ def export_arduino(outdir: Path, libdir: Path, machine: MachineConfig | None = N
     """Write the library; returns {"libname", "dir", "name", "machine", "golden"}. It is built
     beside DIR and then put in its place whole (an earlier library there is replaced, none of its
     files left behind; a failure leaves DIR as it was)."""
+    from nnik.files.atomic_write import held_interrupt
     from nnik.files.output_path import replace_dir, staging_dir
 
     outdir, final = Path(outdir), check_libdir(libdir, outdir)
     libdir = staging_dir(final)
     try:
         res = _write_library(outdir, libdir, final, machine)
-        replace_dir(libdir, final)
+        with held_interrupt():
+            replace_dir(libdir, final)
     except BaseException:
-        shutil.rmtree(libdir, ignore_errors=True)
+        with held_interrupt():
+            shutil.rmtree(libdir, ignore_errors=True)
         raise
     return res
 

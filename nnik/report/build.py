@@ -6,7 +6,7 @@ import os
 import shutil
 from pathlib import Path
 
-from nnik.files.atomic_write import fsync_dir
+from nnik.files.atomic_write import fsync_dir, held_interrupt
 from nnik.files.output_path import staging_dir
 
 from nnik.report import (accuracy, files, implementations, jobs, reference, references, scenario, search_front, summary,
@@ -47,12 +47,14 @@ def write_report(model_dir: Path, out_dir: Path | None = None) -> Path:
         (stage / "report.md").write_text(render_markdown(sections, inp.metrics), encoding="utf-8")
         (stage / "index.html").write_text(render_html(sections, inp.metrics), encoding="utf-8")
         made = sorted(stage.iterdir(), key=lambda p: p.name == "index.html")
-        for old in out_dir.glob("*.png"):  # no stale pictures from an earlier report
-            if (old.name in ALL_PNGS or old.name.startswith(jobs.PNG_PREFIX)) and not (stage / old.name).exists():
-                old.unlink()
-        for p in made:
-            os.replace(p, out_dir / p.name)
+        with held_interrupt():
+            for old in out_dir.glob("*.png"):  # no stale pictures from an earlier report
+                if (old.name in ALL_PNGS or old.name.startswith(jobs.PNG_PREFIX)) and not (stage / old.name).exists():
+                    old.unlink()
+            for p in made:
+                os.replace(p, out_dir / p.name)
         fsync_dir(out_dir)
     finally:
-        shutil.rmtree(stage, ignore_errors=True)
+        with held_interrupt():
+            shutil.rmtree(stage, ignore_errors=True)
     return out_dir / "index.html"
