@@ -12,6 +12,8 @@ from rich.table import Table
 
 from nnik import pipeline
 from nnik.errors import NnikError, NnikWarning, warning_line
+from nnik.files.atomic_write import reraise_lost_interrupts
+from nnik.files.os_errors import os_error_line
 from nnik.files.outdir import check_model_dir, check_outdir, release_locks
 from nnik.report.console import console, print_accuracy, print_front, print_selection
 
@@ -203,10 +205,12 @@ def cmd_export(args) -> None:
     out = _evaluated_dir(args.model_dir)
     if getattr(args, "arduino", None):
         from nnik.files.pick_state import require_deliverable
+        from nnik.firmware.arduino import check_libdir
 
         # the library is firmware: only a finished pick whose c/NAME.c is the verified C (refused
         # before anything is written; the MLP is never delivered in its place)
         require_deliverable(out, "export --arduino")
+        check_libdir(Path(args.arduino), out)  # DIR too, before c/ is touched
     im, _ = pipeline.export(out)
     console.print(f"wrote {out / pipeline.C_DIR}/{im.name}.h and {im.name}.c ({im.weights_bytes()} bytes of tables)")
     if getattr(args, "arduino", None):
@@ -321,18 +325,6 @@ def cmd_report(args) -> None:
     print_report(check_model_dir(args.model_dir), check_outdir(Path(args.outdir)) if args.outdir else None)
 
 
-def cmd_synth_csv(args) -> None:
-    from nnik.machine.scenario import load_scenario
-    from nnik.machine.synth import synthesize_measurements
-
-    scn = load_scenario(args.scenario)
-    n = synthesize_measurements(scn, Path(args.output), args.n, args.noise_um, args.seed, readings=args.readings,
-                                sampling=args.sampling, inset_mm=args.inset_mm)
-    how = "whole-step counter readings at the marks" if args.readings == "rounded" else "whole-step commands"
-    console.print(f"wrote {args.output}: {n} rows from {scn.source} ({args.sampling}, {how}) with {args.noise_um:g} um "
-                  "position noise")
-
-
 def build_parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(prog="nnik", description="Inverse kinematics as verified fixed-point C for 8-bit MCUs.")
     sub = ap.add_subparsers(dest="command", required=True)
@@ -415,8 +407,10 @@ def build_parser() -> argparse.ArgumentParser:
                    help="scattered (sobol) marks or a k x k grid (k = ceil(sqrt(n)))")
     p.add_argument("--inset-mm", type=float, default=0.05, help="marks this far inside [workspace] (default 0.05)")
     p.add_argument("--seed", type=int, default=0)
-    p.set_defaults(func=cmd_synth_csv)
     from nnik.commands import job as job_command
+    from nnik.commands.synth_csv import cmd_synth_csv
+
+    p.set_defaults(func=cmd_synth_csv)
 
     job_command.register(sub)
     return ap
@@ -424,6 +418,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
+    reraise_lost_interrupts()
     # numpy's RuntimeWarnings are held back: after an error the one error line is all that shows;
     # after success they follow the output, one line each, so nothing is lost.
     with warnings.catch_warnings(record=True) as caught:
@@ -433,6 +428,9 @@ def main(argv: list[str] | None = None) -> int:
             args.func(args)
         except NnikError as exc:
             print(f"nnik: error: {exc}", file=sys.stderr)
+            return 2
+        except OSError as exc:  # a full disk, a read-only place: one line (what nnik trusts is written atomically)
+            print(f"nnik: error: {os_error_line(exc)}", file=sys.stderr)
             return 2
         except KeyboardInterrupt:
             print("nnik: interrupted", file=sys.stderr)

@@ -21,6 +21,7 @@ from pathlib import Path
 from nnik import selection as sel
 from nnik.errors import NnikError
 from nnik.files import pick_state
+from nnik.files.atomic_write import replacing
 from nnik.files.c_hash import dir_hash
 from nnik.files.metrics import (C_DIR, DATA_FILE, FIXED_EVAL_FILE, METRICS_FILE, MLP_DIR, MODEL_FILE,  # noqa: F401
                                 ONNX_FILE, load_metrics, write_metrics)
@@ -40,7 +41,8 @@ def generate(scn: Scenario, outdir: Path) -> Dataset:
     outdir.mkdir(parents=True, exist_ok=True)
     pick_state.invalidate(outdir)  # new data: no pick until select or search finishes again
     ds = build_dataset(scn)
-    ds.save(outdir / DATA_FILE)
+    with replacing(outdir / DATA_FILE) as tmp:  # a kill or a full disk leaves the old file, never half of one
+        ds.save(tmp)
     return ds
 
 
@@ -127,7 +129,13 @@ def with_default_target(scn, error_floor: float):
 
 def resolve_target(problem, overrides: dict | None = None) -> tuple[dict, bool]:
     """The [target] the pick is made for (the scenario's, ``overrides`` from the command line on
-    top) and whether max_error was asked for (else it is the default, which a pick may miss)."""
+    top) and whether max_error was asked for (else it is the default, which a pick may miss).
+    The overrides are checked as the scenario's [target] table is, before anything is written."""
+    from nnik.machine.params import validate_table
+    from nnik.machine.scenario import TARGET
+
+    for key, value in (overrides or {}).items():
+        validate_table({key: value}, {key: TARGET[key]}, "the command line", "target")
     target = {**problem.scn.target, **(overrides or {})}
     if target.get("max_error") != problem.scn.target.get("max_error"):
         target["max_error_source"] = "command line"
@@ -236,7 +244,7 @@ def select(outdir: Path, progress: bool = True, families=None, target: dict | No
     c/NAME.{c,h} and every family's best as c/alt/<family>/; metrics["selection"]. ``target``
     overrides the scenario's [target] table (keys as there)."""
     problem = problem_for(outdir)
-    target, asked = resolve_target(problem, target)
+    target, asked = resolve_target(problem, target)  # a limit it refuses is refused here: nothing changed yet
     pick_state.invalidate(outdir)  # c/NAME.c and c/alt/ are about to change
     cands, bests = fit_bests(problem, target, families, progress)
     verify_bests(outdir, bests, progress)  # every family's best, whether or not one meets the target

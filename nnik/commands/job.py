@@ -8,6 +8,7 @@ from rich.console import Console
 from rich.table import Table
 
 from nnik.errors import NnikError
+from nnik.files.outdir import JOB_DIR, check_model_dir
 
 console = Console()
 
@@ -86,7 +87,23 @@ def _model_dir(args) -> Path:
         out = Path(args.outdir) if args.outdir else pipeline.default_outdir(scn)
     if not (out / pipeline.MODEL_FILE).is_file():
         raise NnikError(f"no trained model (run `nnik run {args.scenario}` first)", str(out))
+    if not args.check:  # it writes OUTDIR/job/: a directory, writable, one job at a time (the lock)
+        check_job_outputs(check_model_dir(out, JOB_DIR), Path(args.job))
     return out
+
+
+JOB_OUTPUTS = ("{}.json", "{}.png", "{}_precompensated.gcode", "{}_dynamics.png", "{}_chip_steps.csv")
+
+
+def check_job_outputs(out: Path, job: Path) -> None:
+    """The G-code file is never one of the files the job writes."""
+    from nnik.files.output_path import same_file
+
+    for pattern in JOB_OUTPUTS:
+        dest = out / JOB_DIR / pattern.format(job.stem)
+        if dest.exists() and same_file(dest, job):
+            raise NnikError(f"is a file the job writes ({dest}); nnik never writes over its inputs, move the G-code "
+                            "file elsewhere", str(job))
 
 
 def print_gcode_summary(g: dict) -> None:

@@ -7,24 +7,75 @@ from __future__ import annotations
 
 import os
 import shutil
+import signal
+import sys
 import tempfile
+import threading
+from contextlib import contextmanager
 from pathlib import Path
+
+
+@contextmanager
+def held_interrupt():
+    """Ctrl-C (SIGINT) held back while the block runs and delivered when it ends: a rename
+    sequence or a clean-up is never cut in half (the main thread only: Python raises
+    KeyboardInterrupt nowhere else)."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    old = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, old)
+
+
+def reraise_lost_interrupts() -> None:
+    """A Ctrl-C that lands in a finaliser or a weakref callback (matplotlib has many) is
+    'ignored' by Python with a traceback on stderr, and the command would run on: raise it
+    again instead, where it can stop the command."""
+    default = sys.unraisablehook
+    if getattr(default, "nnik", False):
+        return
+
+    def hook(u):
+        if isinstance(u.exc_value, KeyboardInterrupt):
+            signal.raise_signal(signal.SIGINT)
+            return
+        default(u)
+
+    hook.nnik = True
+    sys.unraisablehook = hook
 
 
 def write_file_atomic(path: Path, data: str | bytes) -> None:
     """Replace one file in a single step: a temporary file beside it, flushed to disk, then
     ``os.replace`` (and the directory flushed), so a crash leaves the old file or the new one,
     never half of either."""
+    with replacing(path) as tmp:
+        tmp.write_bytes(data.encode() if isinstance(data, str) else data)
+
+
+@contextmanager
+def replacing(path: Path):
+    """For writers that take a file name (numpy, torch, onnx, matplotlib): yields a temporary
+    name beside ``path`` with the same suffix; when the block ends without an error the file is
+    flushed and moved onto ``path`` in one step, otherwise it is removed and ``path`` is as it was."""
     path = Path(path)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=f".tmp{path.suffix}", dir=path.parent)
+    os.close(fd)
     try:
-        with os.fdopen(fd, "wb") as f:
-            f.write(data.encode() if isinstance(data, str) else data)
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(tmp, path)
+        yield Path(tmp)
+        fd = os.open(tmp, os.O_RDONLY)
+        try:
+            os.fsync(fd)
+        finally:
+            os.close(fd)
+        with held_interrupt():
+            os.replace(tmp, path)
     except BaseException:
-        Path(tmp).unlink(missing_ok=True)
+        with held_interrupt():
+            Path(tmp).unlink(missing_ok=True)
         raise
     fsync_dir(path.parent)
 
@@ -68,11 +119,13 @@ class Staged:
                 p.parent.mkdir(parents=True, exist_ok=True)
                 p.write_bytes(data)
             out = []
-            for rel in self.files:
-                dest = self.root / rel
-                dest.parent.mkdir(parents=True, exist_ok=True)
-                os.replace(tmp / rel, dest)
-                out.append(dest)
+            with held_interrupt():  # every file moved in, or (an error) none more
+                for rel in self.files:
+                    dest = self.root / rel
+                    dest.parent.mkdir(parents=True, exist_ok=True)
+                    os.replace(tmp / rel, dest)
+                    out.append(dest)
             return out
         finally:
-            shutil.rmtree(tmp, ignore_errors=True)
+            with held_interrupt():
+                shutil.rmtree(tmp, ignore_errors=True)

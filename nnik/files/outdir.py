@@ -4,18 +4,13 @@ from __future__ import annotations
 
 import fcntl
 import os
+import time
 from pathlib import Path
 
 from nnik.errors import NnikError
+from nnik.files.output_path import nearest_existing
 
 JOB_DIR = "job"  # OUTDIR/job/: what `nnik job` leaves (the report embeds it)
-
-
-def _nearest_existing(path: Path) -> Path:
-    p = path.absolute()
-    while not p.exists() and p != p.parent:
-        p = p.parent
-    return p
 
 
 LOCK_FILE = ".nnik.lock"
@@ -29,6 +24,30 @@ def hold_lock(path: Path) -> None:
     if key in _HELD:
         return
     lock = Path(path) / LOCK_FILE
+    while True:
+        fd = _locked(lock, path)
+        try:  # the holder before us may have removed the file as it ended: then lock the new one
+            if os.fstat(fd).st_ino == os.stat(lock).st_ino:
+                break
+        except FileNotFoundError:
+            pass
+        os.close(fd)
+    os.ftruncate(fd, 0)
+    os.pwrite(fd, str(os.getpid()).encode(), 0)
+    _HELD[key] = fd
+
+
+def _holder_pid(fd: int) -> str:
+    """The pid the holder wrote (it writes it just after it locks: a short wait for it)."""
+    for _ in range(20):
+        other = os.pread(fd, 32, 0).decode(errors="replace").strip()
+        if other:
+            return other
+        time.sleep(0.05)
+    return ""
+
+
+def _locked(lock: Path, path: Path) -> int:
     try:
         fd = os.open(lock, os.O_CREAT | os.O_RDWR, 0o644)
     except OSError as exc:
@@ -37,14 +56,12 @@ def hold_lock(path: Path) -> None:
         fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
     except BlockingIOError:
         try:
-            other = os.pread(fd, 32, 0).decode(errors="replace").strip()
+            other = _holder_pid(fd)
         finally:
             os.close(fd)
         raise NnikError(f"another nnik command{' (pid ' + other + ')' if other else ''} is writing into this "
                         "directory; wait for it to finish or choose another -o", str(path)) from None
-    os.ftruncate(fd, 0)
-    os.pwrite(fd, str(os.getpid()).encode(), 0)
-    _HELD[key] = fd
+    return fd
 
 
 def release_locks() -> None:
@@ -65,7 +82,7 @@ def check_outdir(path: Path, create: bool = False) -> Path:
     src = str(path)
     if path.exists() and not path.is_dir():
         raise NnikError("exists and is not a directory; choose another output directory", src)
-    base = _nearest_existing(path)
+    base = nearest_existing(path)
     if not base.is_dir():
         raise NnikError(f"{base} is a file, so it cannot hold an output directory", src)
     if not os.access(base, os.W_OK | os.X_OK):

@@ -50,9 +50,42 @@ def golden_vectors(scn, n: int = N_GOLDEN, seed: int = 0) -> np.ndarray:
     return np.concatenate([np.asarray(fixed, dtype=np.int64), rand])
 
 
+def is_library(libdir: Path) -> bool:
+    """A folder an earlier `nnik export --arduino` wrote (its library.properties names nnik_*)."""
+    try:
+        return (Path(libdir) / "library.properties").read_text(errors="replace").startswith("name=nnik_")
+    except OSError:
+        return False
+
+
+def check_libdir(libdir: Path, outdir: Path) -> Path:
+    """DIR of --arduino, checked before anything is written: new, empty or an earlier library."""
+    from nnik.files.output_path import check_replaceable_dir
+
+    return check_replaceable_dir(libdir, is_library, inputs=[outdir], what="the Arduino library")
+
+
 def export_arduino(outdir: Path, libdir: Path, machine: MachineConfig | None = None) -> dict:
-    """Write the library; returns {"libname", "dir", "name", "machine", "golden"}."""
-    outdir, libdir = Path(outdir), Path(libdir)
+    """Write the library; returns {"libname", "dir", "name", "machine", "golden"}. It is built
+    beside DIR and then put in its place whole (an earlier library there is replaced, none of its
+    files left behind; a failure leaves DIR as it was)."""
+    from nnik.files.atomic_write import held_interrupt
+    from nnik.files.output_path import replace_dir, staging_dir
+
+    outdir, final = Path(outdir), check_libdir(libdir, outdir)
+    libdir = staging_dir(final)
+    try:
+        res = _write_library(outdir, libdir, final, machine)
+        with held_interrupt():
+            replace_dir(libdir, final)
+    except BaseException:
+        with held_interrupt():
+            shutil.rmtree(libdir, ignore_errors=True)
+        raise
+    return res
+
+
+def _write_library(outdir: Path, libdir: Path, final: Path, machine: MachineConfig | None) -> dict:
     scn = load_scenario_of(outdir)
     name = scn.name
     c_dir = ik_sources(outdir, name)
@@ -95,8 +128,8 @@ def export_arduino(outdir: Path, libdir: Path, machine: MachineConfig | None = N
         files[libdir / "examples" / example / "Makefile"] = "Makefile.j2"
     for path, tmpl in files.items():
         path.parent.mkdir(parents=True, exist_ok=True)
-        path.write_text(env.get_template(tmpl).render(**ctx, example=path.parent.name, libdir_name=libdir.resolve().name))
-    return {"libname": libname, "dir": str(libdir), "name": name, "machine": machine, "golden": len(rows)}
+        path.write_text(env.get_template(tmpl).render(**ctx, example=path.parent.name, libdir_name=final.resolve().name))
+    return {"libname": libname, "dir": str(final), "name": name, "machine": machine, "golden": len(rows)}
 
 
 def homepage() -> str:

@@ -18,11 +18,13 @@ HOST_RANDOM = 20_000
 def _write(impl: Implementation, c_dir: Path, write: bool = True) -> str | None:
     """Write the implementation's C into c_dir (or, with ``write=False``, leave the files there
     as they are); returns the hash of the C that will run."""
-    from nnik.emit.templating import write_sources
+    from nnik.files.atomic_write import Staged
 
     if not write:
         return dir_hash(c_dir, impl.problem.name)
-    write_sources(impl.render_c(), c_dir)
+    staged = Staged(c_dir)  # whole files or the old ones: a full disk never leaves half a C file
+    staged.add(impl.render_c())
+    staged.commit()
     return files_hash(impl.render_c())
 
 

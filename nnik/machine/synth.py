@@ -16,6 +16,7 @@ The CSV has the columns `nnik.machine.kinematics.measured` reads.
 from __future__ import annotations
 
 import csv
+import io
 from pathlib import Path
 
 import numpy as np
@@ -23,7 +24,7 @@ import numpy as np
 from nnik.machine.data import exact_targets, sample_points
 from nnik.errors import NnikError
 from nnik.machine.kinematics.base import Workspace
-from nnik.machine.scenario import Scenario
+from nnik.machine.scenario import MAX_SEED, Scenario
 
 EDGE_MARGIN_MM = 0.05  # keep noisy measurements inside the workspace
 READINGS = ("commanded", "rounded")
@@ -34,11 +35,22 @@ def synthesize_measurements(scn: Scenario, path: Path, n: int, noise_um: float, 
                             readings: str = "commanded", sampling: str = "sobol",
                             inset_mm: float = EDGE_MARGIN_MM) -> int:
     """Write the CSV; returns its number of rows (a grid has ceil(sqrt(n))^2 of them)."""
+    text, rows = measurements_csv(scn, n, noise_um, seed, readings, sampling, inset_mm)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(text, newline="")
+    return rows
+
+
+def measurements_csv(scn: Scenario, n: int, noise_um: float, seed: int, readings: str = "commanded",
+                     sampling: str = "sobol", inset_mm: float = EDGE_MARGIN_MM) -> tuple[str, int]:
+    """The CSV's text and its number of rows (every argument checked first, nothing written)."""
     m = scn.mechanism
     if not m.analytic:
         raise NnikError("synth-csv needs an analytic machine to measure", scn.source, "[mechanism] kind")
     if not (20 <= n <= 1_000_000) or not 0 <= noise_um <= 1e4:
         raise NnikError(f"need 20 <= n <= 1000000 and 0 <= noise <= 10000 um (got n={n}, noise={noise_um})")
+    if not 0 <= seed <= MAX_SEED:
+        raise NnikError(f"must be in [0, {MAX_SEED}], got {seed}", None, "--seed")
     if readings not in READINGS or sampling not in SAMPLING:
         raise NnikError(f"readings must be one of {', '.join(READINGS)} and sampling one of {', '.join(SAMPLING)}")
     ws = scn.workspace
@@ -53,10 +65,9 @@ def synthesize_measurements(scn: Scenario, path: Path, n: int, noise_um: float, 
     p_true = p_target if readings == "rounded" else m.forward(m.q_rest + scn.actuator.from_units(commands))
     rng = np.random.default_rng(seed + 7)
     p_meas_um = p_true * 1000 + rng.normal(0.0, noise_um, p_true.shape)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    with open(path, "w", newline="") as fh:
-        w = csv.writer(fh)
-        w.writerow(["x_um", "y_um", "q1", "q2"])
-        for (x, y), (a, b) in zip(p_meas_um, commands):
-            w.writerow([f"{x:.1f}", f"{y:.1f}", int(a), int(b)])
-    return len(commands)
+    fh = io.StringIO(newline="")
+    w = csv.writer(fh)
+    w.writerow(["x_um", "y_um", "q1", "q2"])
+    for (x, y), (a, b) in zip(p_meas_um, commands):
+        w.writerow([f"{x:.1f}", f"{y:.1f}", int(a), int(b)])
+    return fh.getvalue(), len(commands)

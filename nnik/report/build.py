@@ -2,7 +2,12 @@
 
 from __future__ import annotations
 
+import os
+import shutil
 from pathlib import Path
+
+from nnik.files.atomic_write import fsync_dir, held_interrupt
+from nnik.files.output_path import staging_dir
 
 from nnik.report import (accuracy, files, implementations, jobs, reference, references, scenario, search_front, summary,
                          tanh, targets, training, verification)
@@ -34,10 +39,22 @@ def write_report(model_dir: Path, out_dir: Path | None = None) -> Path:
     out_dir = Path(out_dir) if out_dir is not None else model_dir / REPORT_DIRNAME
     inp = load_inputs(model_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
-    for png in ALL_PNGS:  # no stale pictures from an earlier report
-        (out_dir / png).unlink(missing_ok=True)
-    sections = build_sections(inp, out_dir)
-    index = out_dir / "index.html"
-    index.write_text(render_html(sections, inp.metrics), encoding="utf-8")
-    (out_dir / "report.md").write_text(render_markdown(sections, inp.metrics), encoding="utf-8")
-    return index
+    # built whole in a folder beside, then moved in file by file (pictures first, index.html last):
+    # a full disk or a kill while building leaves the earlier report as it was
+    stage = staging_dir(out_dir)
+    try:
+        sections = build_sections(inp, stage)
+        (stage / "report.md").write_text(render_markdown(sections, inp.metrics), encoding="utf-8")
+        (stage / "index.html").write_text(render_html(sections, inp.metrics), encoding="utf-8")
+        made = sorted(stage.iterdir(), key=lambda p: p.name == "index.html")
+        with held_interrupt():
+            for old in out_dir.glob("*.png"):  # no stale pictures from an earlier report
+                if (old.name in ALL_PNGS or old.name.startswith(jobs.PNG_PREFIX)) and not (stage / old.name).exists():
+                    old.unlink()
+            for p in made:
+                os.replace(p, out_dir / p.name)
+        fsync_dir(out_dir)
+    finally:
+        with held_interrupt():
+            shutil.rmtree(stage, ignore_errors=True)
+    return out_dir / "index.html"

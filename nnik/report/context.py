@@ -32,6 +32,8 @@ class Context:
         """Run a plot; a string result (or an exception) is a reason shown as "not run"."""
         try:
             r = fn()
+        except OSError:  # a full disk or an unwritable folder is the command's error, not the picture's
+            raise
         except Exception as exc:  # noqa: BLE001 - one broken picture must not sink the report
             r = f"picture failed ({short_exc(exc)})"
         if isinstance(r, Fig):

@@ -20,8 +20,6 @@ NUMERIC = {"segments", "steps", "contour max / RMS (µm)", "IK max (µm)", "roun
 
 def build(ctx) -> Section:
     sec = Section("jobs", "G-code jobs on the simulated Uno")
-    for old in ctx.out.glob(f"{PNG_PREFIX}*.png"):  # no pictures of jobs that are gone
-        old.unlink()
     items = job_section_png(ctx.inp.model_dir)
     if not items:
         sec.not_run.append("not run — run `nnik job OUTDIR JOB.gcode`")

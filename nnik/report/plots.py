@@ -18,6 +18,8 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg  # noqa: E402
 from matplotlib.figure import Figure  # noqa: E402
 from matplotlib.lines import Line2D  # noqa: E402
 
+from nnik.files.atomic_write import replacing  # noqa: E402
+
 DPI = 110
 # Colours used consistently across the pictures.
 C_FLOAT = "#1f77b4"
@@ -38,7 +40,8 @@ def _figure(width: float, height: float) -> Figure:
 def _save(fig: Figure, path: Path) -> Path:
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, format="png", dpi=DPI, facecolor="white")
+    with replacing(path) as tmp:
+        fig.savefig(tmp, format="png", dpi=DPI, facecolor="white")
     return path
 
 

@@ -26,6 +26,21 @@ def storage_kind(url: str | None) -> str:
     return url.split("://", 1)[0].split("+", 1)[0]
 
 
+def is_journal(path: Path) -> bool:
+    """A file an Optuna journal may append to: absent, empty, or one whose first line is a
+    journal record (never a scenario, a model or any other file named by mistake)."""
+    import json
+
+    if not path.exists():
+        return True
+    try:
+        with open(path, "rb") as f:
+            first = f.readline(1 << 16)
+        return first == b"" or "op_code" in json.loads(first)
+    except (OSError, ValueError, TypeError):
+        return False
+
+
 def _journal(path: Path):
     from optuna.storages.journal import JournalFileBackend, JournalFileOpenLock, JournalStorage
 
@@ -43,6 +58,9 @@ def open_storage(url: str | None, outdir: Path):
         path = Path(url.split("://", 1)[1])
         if not path.parent.is_dir() or path.is_dir():
             raise NnikError(f"storage URL {url!r}: {path} must be a file in an existing directory", "--storage")
+        if not is_journal(path):
+            raise NnikError(f"storage URL {url!r}: {path} exists and is not an Optuna journal; nnik appends only to "
+                            "its own journals, choose a new file", "--storage")
         return _journal(path)
     if scheme not in RDB_SCHEMES:
         raise NnikError(f"storage URL {url!r}: expected postgresql://USER@HOST:PORT/DB, sqlite:///FILE or "

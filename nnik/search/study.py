@@ -180,6 +180,10 @@ def run_worker(outdir: str, url: str | None, name: str, n_total: int, families: 
         callbacks.append(show)
     try:
         study.optimize(objective, n_trials=n_total - done, callbacks=callbacks, gc_after_trial=False)
+    except Exception as exc:  # a full disk under the journal: optuna hides it behind its own error
+        from nnik.files.os_errors import os_error_behind
+
+        raise (os_error_behind(exc) or exc) from None
     finally:
         if bar:
             bar.close()

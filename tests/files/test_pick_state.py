@@ -91,7 +91,7 @@ def test_verify_a_family_on_request(picked_run, tmp_path, capsys):
     assert pick_state.status(run).ok  # the pick itself is untouched
 
 
-@pytest.mark.parametrize("spoil", ["no marker", "corrupt marker", "other model", "evaluate again", "metrics rewritten"])
+@pytest.mark.parametrize("spoil", ["no marker", "corrupt marker", "other model", "evaluate another model", "metrics rewritten"])
 def test_no_finished_pick_nothing_is_delivered(picked_run, tmp_path, capsys, spoil):
     run = copy_picked(picked_run, tmp_path / "run")
     marker = run / pick_state.PICK_FILE
@@ -101,7 +101,12 @@ def test_no_finished_pick_nothing_is_delivered(picked_run, tmp_path, capsys, spo
         marker.write_text(marker.read_text()[:40])
     elif spoil == "other model":
         (run / "data.npz").write_bytes((run / "data.npz").read_bytes() + b"\0")
-    elif spoil == "evaluate again":
+    elif spoil == "evaluate another model":
+        from nnik.implementations.mlp.train import TrainedModel
+
+        model = TrainedModel.load(run / "model.pt")
+        model.train_seconds += 1.0  # another model.pt than the pick was made from (evaluating the
+        model.save(run / "model.pt")  # same one keeps the pick: tests/test_bad_input_dataloss.py)
         assert main(["evaluate", str(run)]) == 0  # metrics.json rewritten without the selection
         assert not marker.exists()
     else:

@@ -26,6 +26,7 @@ import numpy as np
 from nnik.dynamics.precompensate import gcode as pc_gcode
 from nnik.dynamics.precompensate import precompensated
 from nnik.dynamics.shapers import KINDS
+from nnik.files.atomic_write import write_file_atomic
 from nnik.firmware.config import shaper_taps
 from nnik.firmware.gcode.motion import interpret, plan_steps
 from nnik.firmware.gcode.steps import model_events
@@ -208,7 +209,7 @@ def job_dynamics(scn, cfg, lines: list[str], ik, shaper: str | None, precompensa
     run_lines = res[chosen].get("gcode") or lines
     if chosen == "precompensated":
         pc_path = out_dir / f"{stem}_precompensated.gcode"
-        pc_path.write_text("\n".join(res[chosen]["gcode"]) + "\n")
+        write_file_atomic(pc_path, "\n".join(res[chosen]["gcode"]) + "\n")
         pick["gcode"] = str(pc_path)
     tracks = {m: res[m]["track"] for m in ("none", chosen) if "track" in res.get(m, {})}
     plan = res["none"]["run"][1]

@@ -144,7 +144,7 @@ def write_step_counts(path: Path, steps: np.ndarray, start: np.ndarray) -> Path:
         count[sel] = start[m] + np.cumsum(sign[sel])
     path.parent.mkdir(parents=True, exist_ok=True)
     rows = np.column_stack([steps, count])
-    path.write_text("cycle,motor,dir,count\n" + ("%d,%d,%d,%d\n" * len(rows)) % tuple(rows.ravel().tolist()))
+    write_file_atomic(path, "cycle,motor,dir,count\n" + ("%d,%d,%d,%d\n" * len(rows)) % tuple(rows.ravel().tolist()))
     return path
 
 

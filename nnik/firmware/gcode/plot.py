@@ -12,6 +12,7 @@ from matplotlib.collections import LineCollection  # noqa: E402
 from matplotlib.lines import Line2D  # noqa: E402
 import numpy as np  # noqa: E402
 
+from nnik.files.atomic_write import replacing  # noqa: E402
 from nnik.firmware.gcode.contour import move_dist  # noqa: E402
 from nnik.firmware.config import MachineConfig  # noqa: E402
 from nnik.firmware.gcode.motion import Plan  # noqa: E402
@@ -101,7 +102,8 @@ def job_png(path: Path, title: str, plan: Plan, cfg: MachineConfig, plot: dict, 
     fig.suptitle(title, fontsize=10)
     fig.tight_layout()
     path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path)
+    with replacing(path) as tmp:
+        fig.savefig(tmp)
     plt.close(fig)
     return path
 

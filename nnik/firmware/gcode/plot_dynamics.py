@@ -12,6 +12,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from nnik.files.atomic_write import replacing  # noqa: E402
 from nnik.firmware.gcode.plot import _path_points  # noqa: E402
 
 ZOOM_MM = 0.3
@@ -51,6 +52,7 @@ def dynamics_png(path: Path, title: str, plan, cfg, tracks: dict, chosen: str, f
     ax2.grid(alpha=0.3)
     fig.suptitle(title, fontsize=9)
     fig.tight_layout()
-    fig.savefig(path)
+    with replacing(path) as tmp:
+        fig.savefig(tmp)
     plt.close(fig)
     return Path(path)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import io
 import json
 import warnings
 from pathlib import Path
@@ -19,20 +20,27 @@ ONNX_TOLERANCE = 1e-6  # normalised output units
 
 def export_onnx(model: TrainedModel, path: Path) -> None:
     """Write the network (normalised input -> standardised output); the scaling goes in metadata."""
+    from nnik.files.atomic_write import write_file_atomic
+
+    write_file_atomic(path, _onnx_bytes(model))  # whole or not at all
+
+
+def _onnx_bytes(model: TrainedModel) -> bytes:
     net = model.net.eval()
     dummy = torch.zeros(1, net.shape[0], dtype=torch.float64)
+    buf = io.BytesIO()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # the TorchScript exporter announces its deprecation
         torch.onnx.export(
-            net, (dummy,), str(path), dynamo=False, input_names=["x_normalized"], output_names=["y_standardized"],
+            net, (dummy,), buf, dynamo=False, input_names=["x_normalized"], output_names=["y_standardized"],
             dynamic_axes={"x_normalized": {0: "n"}, "y_standardized": {0: "n"}}, opset_version=17,
         )
-    m = onnx.load(str(path))
+    m = onnx.load_from_string(buf.getvalue())
     meta = {"scenario": model.scenario.name, "unit": model.scenario.unit, "outputs": model.scenario.outputs,
             "scaling": model.scaling.to_dict()}
     onnx.helper.set_model_props(m, {"nnik": json.dumps(meta)})
     onnx.checker.check_model(m)
-    onnx.save(m, str(path))
+    return m.SerializeToString()
 
 
 def check_onnx(model: TrainedModel, path: Path, p_mm: np.ndarray) -> float:

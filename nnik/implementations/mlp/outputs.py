@@ -20,8 +20,8 @@ from sklearn.linear_model import LinearRegression
 from nnik.errors import NnikError
 from nnik.files import pick_state
 from nnik.files.c_hash import dir_hash
-from nnik.files.metrics import (C_DIR, DATA_FILE, FIXED_EVAL_FILE, MLP_DIR, MODEL_FILE, ONNX_FILE, load_metrics,
-                                write_metrics)
+from nnik.files.metrics import (C_DIR, DATA_FILE, FIXED_EVAL_FILE, METRICS_FILE, MLP_DIR, MODEL_FILE, ONNX_FILE,
+                                load_metrics, write_metrics)
 from nnik.implementations.mlp.evaluate import error_stats, position_error_um, relative_pct
 from nnik.implementations.mlp.onnx_export import ONNX_TOLERANCE, check_onnx, export_onnx
 from nnik.implementations.mlp.train import MAX_FIT_ROWS, TrainedModel, train_model
@@ -72,9 +72,15 @@ def evaluate(outdir: Path) -> dict:
     if not onnx_diff <= ONNX_TOLERANCE:
         raise NnikError(f"ONNX model differs from torch by {onnx_diff:.3g} (> {ONNX_TOLERANCE:g})", str(outdir / ONNX_FILE))
     shape = list(model.net.shape)
-    pick_state.invalidate(outdir)  # metrics.json is rewritten without a selection
+    inputs = pick_state.inputs_hash(outdir)
+    # the same model.pt and data.npz as the metrics on disk describe: the accuracy is measured
+    # again and every later section (the selection, the pick) stays; else they go with the old model
+    same = _evaluated_inputs(outdir) == inputs
+    if not same:
+        pick_state.invalidate(outdir)
     seconds = model.train_seconds if math.isfinite(model.train_seconds) else None  # its time file may be gone
     metrics = {
+        "evaluated_inputs": inputs,
         "name": scn.name,
         "scenario": scn.source,
         "mechanism": scn.mechanism.describe(),
@@ -101,8 +107,21 @@ def evaluate(outdir: Path) -> dict:
     pos = position_error_um(scn, pred, p)
     if pos is not None:
         metrics["float"]["position_um"] = pos
-    write_metrics(outdir, metrics, merge=False)
+    write_metrics(outdir, metrics, merge=same)
     return metrics
+
+
+def _evaluated_inputs(outdir: Path) -> dict | None:
+    """The hashes of model.pt and data.npz that metrics.json on disk was made from (None if unknown)."""
+    from nnik.files.metrics import read_metrics
+
+    path = outdir / METRICS_FILE
+    try:
+        old = read_metrics(path) if path.is_file() else {}
+    except NnikError:
+        return None
+    sel = old.get("selection")
+    return old.get("evaluated_inputs") or (sel.get("inputs") if isinstance(sel, dict) else None)
 
 
 
@@ -150,7 +169,7 @@ def export(outdir: Path):
     returns both integer models (scenario's kernel first). Nothing is written unless every
     file was generated and the range analysis held (see nnik.files.atomic_write)."""
     from nnik.implementations.mlp import quantize as fx
-    from nnik.files.atomic_write import Staged
+    from nnik.files.atomic_write import Staged, replacing
     from nnik.implementations.mlp.export import render_model_c
 
     model, ds = load_pair(outdir)
@@ -180,8 +199,9 @@ def export(outdir: Path):
         "tanh": {"variant": im.tanh_variant, **{k: tanh_stats[k] for k in ("max_lsb", "rms_lsb") if k in tanh_stats}},
         "baselines": baselines,
     })
-    np.savez_compressed(outdir / FIXED_EVAL_FILE, p_test=ds.p["test"], q_true=truth, q_float=model.predict(ds.p["test"]),
-                        q_fixed=pre, q_delivered=delivered)
+    with replacing(outdir / FIXED_EVAL_FILE) as tmp:
+        np.savez_compressed(tmp, p_test=ds.p["test"], q_true=truth, q_float=model.predict(ds.p["test"]),
+                            q_fixed=pre, q_delivered=delivered)
     return im, alt_im
 
 

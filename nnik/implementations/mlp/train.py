@@ -82,7 +82,8 @@ class TrainedModel:
     def save(self, path: Path) -> None:
         """model.pt (atomically) and, beside it, the training's wall-clock time (TIME_FILE). model.pt
         holds nothing that depends on the machine's load, so its bytes (and the hashes that the pick
-        records) are the same on an idle or a loaded machine."""
+        records) are the same on an idle or a loaded machine. Written whole or not at all: torch's
+        own file writer turns a full disk into a RuntimeError, so the bytes are made in memory."""
         buf = io.BytesIO()
         torch.save(
             {

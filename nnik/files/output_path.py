@@ -1,0 +1,118 @@
+"""Output paths checked before a command does any work: never one of the command's inputs, never
+a directory where a file goes (or a file where a directory goes), never under a file, and a
+directory that nnik replaces as a whole only when nnik wrote it. Each refusal is one line."""
+
+from __future__ import annotations
+
+import ctypes
+import os
+import shutil
+import tempfile
+from pathlib import Path
+
+from nnik.errors import NnikError
+
+
+def nearest_existing(path: Path) -> Path:
+    p = Path(path).absolute()
+    while not p.exists() and p != p.parent:
+        p = p.parent
+    return p
+
+
+def same_file(a: Path, b: Path) -> bool:
+    """One file under two names (a link, a relative path, the same path)?"""
+    try:
+        return os.path.samefile(a, b)
+    except OSError:
+        return Path(a).absolute().resolve() == Path(b).absolute().resolve()
+
+
+def _parent_ok(path: Path, what: str) -> None:
+    base = nearest_existing(path.parent)
+    if not base.is_dir():
+        raise NnikError(f"{base} is a file, so it cannot hold {what}", str(path))
+    if not os.access(base, os.W_OK | os.X_OK):
+        raise NnikError(f"{base} is not writable", str(path))
+
+
+def check_output_file(path: Path, inputs=(), what: str = "the output file") -> Path:
+    """A file this command may write (replacing it atomically if it exists)."""
+    path = Path(path)
+    if not str(path).strip():
+        raise NnikError(f"an empty name for {what}")
+    if path.is_dir():
+        raise NnikError(f"is a directory; {what} needs a file name", str(path))
+    for inp in inputs:
+        if inp is not None and path.exists() and same_file(path, inp):
+            raise NnikError(f"is an input of this command ({inp}); nnik never writes over its inputs, choose "
+                            "another file", str(path))
+    _parent_ok(path, what)
+    return path
+
+
+def check_replaceable_dir(path: Path, ours, inputs=(), what: str = "the output directory") -> Path:
+    """A directory that will be written whole: absent, empty, or one that ``ours(path)`` says nnik
+    wrote earlier (replaced as a whole, see :func:`replace_dir`). Never one holding an input."""
+    path = Path(path)
+    if not str(path).strip():
+        raise NnikError(f"an empty name for {what}")
+    if path.exists() and not path.is_dir():
+        raise NnikError(f"exists and is not a directory; choose a new directory for {what}", str(path))
+    for inp in inputs:
+        if inp is not None and path.exists() and (same_file(path, inp) or path.resolve() in Path(inp).resolve().parents):
+            raise NnikError(f"holds an input of this command ({inp}); choose a new directory for {what}", str(path))
+    if path.is_dir() and any(path.iterdir()) and not ours(path):
+        raise NnikError(f"exists and is not {what} that nnik wrote; nnik replaces only its own, choose a new or "
+                        "empty directory", str(path))
+    _parent_ok(path, what)
+    return path
+
+
+def staging_dir(dest: Path) -> Path:
+    """A new empty directory beside ``dest`` (the same file system, so it can be renamed onto it)."""
+    dest = Path(dest)
+    dest.parent.mkdir(parents=True, exist_ok=True)
+    d = Path(tempfile.mkdtemp(prefix=f".{dest.name}.staging-", dir=dest.parent))
+    mask = os.umask(0o22)
+    os.umask(mask)
+    d.chmod(0o777 & ~mask)  # as a plain mkdir would make it (mkdtemp's is private)
+    return d
+
+
+_RENAME_EXCHANGE = 2
+_AT_FDCWD = -100
+
+
+def _exchange(a: Path, b: Path) -> bool:
+    """Swap two directory entries in one step (Linux renameat2); False where it is not offered."""
+    try:
+        fn = ctypes.CDLL(None, use_errno=True).renameat2
+    except (OSError, AttributeError):
+        return False
+    rc = fn(_AT_FDCWD, os.fsencode(str(a)), _AT_FDCWD, os.fsencode(str(b)), _RENAME_EXCHANGE)
+    if rc == 0:
+        return True
+    err = ctypes.get_errno()
+    if err in (22, 38, 95):  # EINVAL, ENOSYS, EOPNOTSUPP: the file system cannot exchange
+        return False
+    raise OSError(err, os.strerror(err), str(b))
+
+
+def replace_dir(staged: Path, dest: Path) -> None:
+    """Put the directory ``staged`` in the place of ``dest``: where the kernel can, both entries
+    are exchanged in one step (a kill leaves the old directory or the new one, whole); elsewhere
+    the old one is renamed aside first. The old content is then removed."""
+    from nnik.files.atomic_write import fsync_dir
+
+    staged, dest = Path(staged), Path(dest)
+    if not dest.exists():
+        os.rename(staged, dest)
+    elif _exchange(staged, dest):
+        shutil.rmtree(staged, ignore_errors=True)  # now the old directory
+    else:
+        old = Path(tempfile.mkdtemp(prefix=f".{dest.name}.old-", dir=dest.parent))
+        os.rename(dest, old / dest.name)
+        os.rename(staged, dest)
+        shutil.rmtree(old, ignore_errors=True)
+    fsync_dir(dest.parent)
