@@ -416,9 +416,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--inset-mm", type=float, default=0.05, help="marks this far inside [workspace] (default 0.05)")
     p.add_argument("--seed", type=int, default=0)
     p.set_defaults(func=cmd_synth_csv)
-    from nnik.commands import job as job_command
+    from nnik.commands import job as job_command, shaper_calibrate
 
     job_command.register(sub)
+    shaper_calibrate.register(sub)
     return ap
 
 
