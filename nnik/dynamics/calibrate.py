@@ -9,9 +9,11 @@ Resonance: the test drives the axis with acceleration amplitude proportional to 
 sweep rate, so the measured PSD is c f^2 |H(f)|^2 plus the accelerometer's white noise n, with
 H the base-excited spring-damper's (nnik.dynamics.axis; base to tip acceleration).  The peak of
 PSD / f^2 and its half-power points give a first (f, zeta); a least-squares fit of that model,
-smeared by the Welch window's own spectrum, in log power over the peak's neighbourhood gives
-the undamped natural frequency f_n and the damping ratio.  From a raw log the fit uses a longer
-window (FIT_WINDOW_S: finer bins), from a processed one Klipper's bins.
+smeared by the Welch window's own spectrum (and the bit of sweep each window holds), in log
+power over the peak's neighbourhood gives the undamped natural frequency f_n and the damping
+ratio.  The fit stops short of where the sweep ended: from a raw log, the drive's highest
+frequency (sweep_end); from a processed one, where the PSD steps down END_DROP times within two
+bins (to the drive's harmonics, ~1/243) and stays there, two bins or more past the peak.
 
 Shaper: Klipper's fit_shaper and find_best_shaper rules, restated: each shaper's frequency is
 scanned down from 200 Hz in 0.2 Hz steps from its min_freq; its vibration (the worst over damping
@@ -36,10 +38,11 @@ from nnik.dynamics.shaper_figures import (DEFAULT_ZETA, MAX_FREQ, MIN_FREQ, max_
 from nnik.dynamics.shapers import KINDS, design
 
 WINDOW_S = 0.5  # Klipper's Welch window
-# the resonance fit's window on a raw log: the sweep crosses each frequency once, so longer windows
-# do not average more; at 1 Hz/s a window of 1 s sees a 1 Hz chirp, about its own resolution
-FIT_WINDOW_S = 1.0
 SWEEP_HZ_PER_S = 1.0  # Klipper's default hz_per_sec: a window's chirp widens its kernel by this x its length
+# where the sweep ends the drive stops: the PSD falls this much within two bins (to the square
+# wave's harmonics, ~1/243 of it), which no resonance's flank does 3 half-widths past its peak
+END_DROP = 12.0
+INTERIOR_DROP = 1.1
 KAISER_BETA = 6.0
 MIN_SHAPER_FREQ = {"zv": 21.0, "mzv": 23.0, "zvd": 29.0, "ei": 29.0, "2hump_ei": 39.0, "3hump_ei": 48.0}
 AUTOTUNE = ("zv", "mzv", "ei", "2hump_ei", "3hump_ei")
@@ -59,6 +62,26 @@ class Spectrum:
     psd: np.ndarray  # (N, 4): x, y, z and their sum, not normalised
     nfft: int  # the Welch window behind the bins (0: unknown)
     rate_hz: float = 0.0
+    sweep_end_hz: float | None = None  # where the test's drive stopped, when the log tells (raw)
+
+
+def sweep_end(rows: np.ndarray, m: int, fs: float) -> float | None:
+    """The highest frequency the test drove: in each window the drive stands out as one tone (the
+    axis answers at the frequency it is driven at); the 99th percentile of the tones' frequencies
+    over the windows that have one (its bin 20 x the window's median)."""
+    n = (len(rows) // m) * m
+    if n < 4 * m:
+        return None
+    x = rows[:n, 1:4].reshape(-1, m, 3)
+    x = x - x.mean(axis=1, keepdims=True)
+    spec = (np.abs(np.fft.rfft(x, axis=1)) ** 2).sum(axis=2)
+    freqs = np.fft.rfftfreq(m, 1.0 / fs)
+    band = (freqs >= MIN_FREQ) & (freqs <= 0.45 * fs)
+    s = spec[:, band]
+    tonal = s.max(axis=1) > 20 * np.median(s, axis=1)
+    if tonal.sum() < 4:
+        return None
+    return float(np.percentile(freqs[band][np.argmax(s[tonal], axis=1)], 99))
 
 
 def _welch(rows: np.ndarray, window_s: float) -> Spectrum:
@@ -74,17 +97,12 @@ def _welch(rows: np.ndarray, window_s: float) -> Spectrum:
                          detrend="constant", scaling="density")
         cols.append(p)
     psd = np.column_stack(cols + [cols[0] + cols[1] + cols[2]])
-    return Spectrum(freqs, psd, m, fs)
+    return Spectrum(freqs, psd, m, fs, sweep_end(rows, m, fs))
 
 
 def klipper_spectrum(rows: np.ndarray) -> Spectrum:
     """Klipper's PSD of raw rows (time, ax, ay, az)."""
     return _welch(rows, WINDOW_S)
-
-
-def fit_spectrum(rows: np.ndarray) -> Spectrum:
-    """The finer PSD the resonance fit uses."""
-    return _welch(rows, FIT_WINDOW_S)
 
 
 def _kernel(nfft: int, chirp_bins: float) -> np.ndarray:
@@ -125,25 +143,37 @@ def find_resonance(sp: Spectrum, hi_hz: float | None = None) -> Resonance:
     """The dominant resonance in [SEARCH_LO_HZ, hi_hz (default MAX_FREQ, and below Nyquist)] of
     the summed PSD.  CalibrationError when there is none."""
     f, p = sp.freqs, sp.psd[:, 3]
-    hi = min(hi_hz or MAX_FREQ, MAX_FREQ, (sp.rate_hz or np.inf) * 0.45)
+    df = float(f[-1] - f[0]) / (len(f) - 1)
+    # a bin below the sweep's end: past it the drive is gone
+    hi = min(hi_hz or MAX_FREQ, MAX_FREQ, (sp.rate_hz or np.inf) * 0.45, (sp.sweep_end_hz or np.inf) - df)
     sel = (f >= SEARCH_LO_HZ) & (f <= hi)
     if sel.sum() < 8:
         raise CalibrationError(f"no resonance in {SEARCH_LO_HZ:g}-{hi:g} Hz: the log has {int(sel.sum())} bins there")
-    df = float(f[-1] - f[0]) / (len(f) - 1)
     # the response with the test's f^2 drive taken out, over ~1.5 Hz (a window's ripple averaged)
     fs, q = f[sel], _smooth(p[sel] / f[sel] ** 2, int(round(1.5 / df)))
     if not np.all(np.isfinite(q)) or q.max() <= 0:
         raise CalibrationError(f"no resonance in {SEARCH_LO_HZ:g}-{hi:g} Hz: the PSD is zero there")
     i = int(np.argmax(q))
     lo_i, hi_i = _half_power(fs, q, i)
-    if lo_i is None or hi_i is None:
+    # a peak near the band's (or the sweep's) end may fall to half power on one side only; the
+    # other side must still fall by a tenth: a response that keeps rising is no resonance
+    interior = 2 <= i <= len(q) - 3 and q[i] > INTERIOR_DROP * max(q[0], q[-1])
+    if (lo_i is None and hi_i is None) or ((lo_i is None or hi_i is None) and not interior):
         where = "the band's lower end" if lo_i is None else "the band's upper end"
         raise CalibrationError(f"no resonance in {SEARCH_LO_HZ:g}-{hi:g} Hz: the response has no peak that falls to half "
-                               f"its power on both sides (it keeps rising towards {where})")
+                               f"its power (it keeps rising towards {where})")
     fp = float(fs[i])
-    z0 = float(np.clip((fs[hi_i] - fs[lo_i]) / (2 * fp), 0.01, 0.5))
+    half_widths = [fp - fs[lo_i]] if lo_i is not None else []
+    half_widths += [fs[hi_i] - fp] if hi_i is not None else []
+    z0 = float(np.clip(np.mean(half_widths) / fp, 0.01, 0.5))
     w = float(np.clip(3 * z0, 0.12, 0.35))
     band = (max(fp * (1 - w), SEARCH_LO_HZ), min(fp * (1 + w), hi))
+    if sp.sweep_end_hz is None:  # a PSD without times: the sweep's end is where the power steps down
+        start = int(np.searchsorted(f, fp)) + 2
+        for k in range(start, min(int(np.searchsorted(f, band[1])), len(f) - 3)):
+            if p[k - 1] > END_DROP * p[k + 1] and p[k + 1] < 3 * p[k + 3]:  # a step, flat after it
+                band = (band[0], float(f[k - 1]))
+                break
     res = _fit(sp, band, fp, z0)
     if not (band[0] <= res.f_hz <= band[1]) or not 0.0 < res.zeta <= 0.5:
         raise CalibrationError(f"no resonance in {SEARCH_LO_HZ:g}-{hi:g} Hz: the spring-damper fit around {fp:.1f} Hz "
@@ -155,7 +185,8 @@ def _fit(sp: Spectrum, band: tuple[float, float], fp: float, z0: float) -> Reson
     f, p = sp.freqs, sp.psd[:, 3]
     df = float(f[-1] - f[0]) / (len(f) - 1)
     sel = np.flatnonzero((f >= band[0]) & (f <= band[1]))
-    kern = _kernel(sp.nfft, SWEEP_HZ_PER_S * sp.nfft / sp.rate_hz / df if sp.rate_hz else 0.0) if sp.nfft else np.array([1.0])
+    # a window of 1 / df seconds holds SWEEP_HZ_PER_S / df Hz of the sweep
+    kern = _kernel(sp.nfft, SWEEP_HZ_PER_S / df**2) if sp.nfft else np.array([1.0])
     over = KERNEL_OVERSAMPLE if sp.nfft else 1
     half = (len(kern) - 1) // 2
     fine = f[sel[0]] + (np.arange((len(sel) - 1) * over + 1 + 2 * half) - half) * df / over

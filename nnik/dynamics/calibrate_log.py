@@ -8,7 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from nnik.dynamics.calibrate import (PSD_NFFT, Resonance, ShaperFit, Spectrum, best_shaper, find_resonance,
-                                     fit_spectrum, klipper_spectrum)
+                                     klipper_spectrum)
 from nnik.dynamics.resonance_log import ResonanceLog
 from nnik.dynamics.shaper_figures import DEFAULT_ZETA, denormalize_psd, normalize_psd
 
@@ -35,7 +35,7 @@ def spectrum_of(log: ResonanceLog) -> Spectrum:
 
 def calibrate(log: ResonanceLog, zeta: float = DEFAULT_ZETA) -> Calibration:
     sp = spectrum_of(log)
-    res = find_resonance(fit_spectrum(log.rows) if log.kind == "raw" else sp)
+    res = find_resonance(sp)
     norm = normalize_psd(sp.freqs, sp.psd[:, 3])
     best, fits = best_shaper(sp.freqs, norm, zeta)
     return Calibration(sp, norm, res, best, fits, zeta)

@@ -45,10 +45,11 @@ def normalize_psd(freqs: np.ndarray, psd: np.ndarray) -> np.ndarray:
 
 
 def denormalize_psd(freqs: np.ndarray, psd: np.ndarray) -> np.ndarray:
-    """normalize_psd undone."""
+    """normalize_psd undone (0 where its low-frequency factor underflowed to 0: near 0 Hz)."""
     out = np.asarray(psd, float) * (freqs + 0.1)
+    factor = np.exp(1.0 - (2.0 * MIN_FREQ / (freqs + 0.1)) ** 2)
     low = freqs < 2.0 * MIN_FREQ
-    out[low] /= np.exp(1.0 - (2.0 * MIN_FREQ / (freqs[low] + 0.1)) ** 2)
+    out[low] = np.where(factor[low] > 1e-200, out[low] / np.maximum(factor[low], 1e-200), 0.0)
     return out
 
 
