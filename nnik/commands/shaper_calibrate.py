@@ -15,7 +15,11 @@ HELP = ("find an axis's resonance and the input shaper for it from Klipper's res
         "(raw_data_<axis>_*.csv or resonances_<axis>_*.csv)")
 
 
-def _zeta(text: str) -> float:
+def _zeta(text: str | None) -> float:
+    from nnik.dynamics.shaper_figures import DEFAULT_ZETA
+
+    if text is None:
+        return DEFAULT_ZETA
     try:
         z = float(text)
     except ValueError:
@@ -32,7 +36,7 @@ def register(sub) -> None:
                    "(freq,psd_x,psd_y,psd_z,psd_xyz)")
     p.add_argument("--axis", choices=("x", "y", "xy"), help="the axis the log tested (default: from the file name, "
                    "raw_data_x_... / resonances_y_...; else both)")
-    p.add_argument("--damping-ratio", type=_zeta, default=None, help="the damping ratio the shapers are designed "
+    p.add_argument("--damping-ratio", help="the damping ratio the shapers are designed "
                    "for (default 0.1, Klipper's)")
     p.add_argument("-o", "--output", help="write the [shaper] lines to this file (a scenario fragment)")
     p.add_argument("--png", help="draw the PSD and each shaper's response here (default: -o's name with .png)")
@@ -51,10 +55,10 @@ def run(args) -> None:
     from nnik.dynamics.calibrate import CalibrationError
     from nnik.dynamics.calibrate_log import calibrate
     from nnik.dynamics.resonance_log import read_log
-    from nnik.dynamics.shaper_figures import DEFAULT_ZETA
     from nnik.files.atomic_write import write_file_atomic
 
     src = args.log
+    zeta = _zeta(args.damping_ratio)
     out = Path(args.output) if args.output else None
     png = Path(args.png) if args.png else (out.with_suffix(".png") if out else None)
     for path, opt in ((out, "-o"), (png, "--png")):
@@ -65,7 +69,7 @@ def run(args) -> None:
         axes = args.axis or log.axis or "xy"
         if axes not in ("x", "y", "xy"):
             raise CalibrationError(f"the file name says axis {axes!r}; nnik shapes X and Y: give --axis x or y")
-        cal = calibrate(log, DEFAULT_ZETA if args.damping_ratio is None else args.damping_ratio)
+        cal = calibrate(log, zeta)
     except CalibrationError as exc:
         raise NnikError(str(exc), src) from None
     res, best = cal.resonance, cal.best

@@ -6,8 +6,8 @@ normalised, as Klipper's calibrate_shaper.py reads it).
 
 Every problem is one CalibrationError line: empty, binary, another header, a short or
 non-numeric row, time not increasing, too few samples, a clipped accelerometer (its extreme
-value held at least CLIP_MIN samples and 1 in CLIP_FRACTION of them: a flat top that no
-resonance gives), or a PSD that is negative or not over increasing frequencies.
+value held by CLIP_MIN samples and CLIP_PILE times as many as the next value in: what lay beyond
+the rail piled up on it), or a PSD that is negative or not over increasing frequencies.
 """
 
 from __future__ import annotations
@@ -24,7 +24,7 @@ RAW = ("time", "accel_x", "accel_y", "accel_z")
 PSD = ("freq", "psd_x", "psd_y", "psd_z", "psd_xyz")
 MIN_RAW_S = 5.0
 MIN_RATE_HZ = 100.0
-CLIP_MIN, CLIP_FRACTION = 20, 1000
+CLIP_MIN, CLIP_PILE, CLIP_LEVELS = 20, 3.0, 16
 MAX_BYTES = 1 << 30
 NAME = re.compile(r"(?:raw_data|resonances)_([a-z])_", re.I)
 
@@ -116,15 +116,25 @@ def _raw(rows: np.ndarray, path: Path) -> ResonanceLog:
     if rate < MIN_RATE_HZ:
         raise CalibrationError(f"{rate:.0f} samples a second: too few to see resonances (at least {MIN_RATE_HZ:g})")
     for k, name in enumerate(RAW[1:], start=1):
-        x = rows[:, k]
-        if np.ptp(x) == 0:
-            continue
-        n = max(int(np.sum(x == x.max())), int(np.sum(x == x.min())))
-        if n >= max(CLIP_MIN, len(x) // CLIP_FRACTION):
-            raise CalibrationError(f"{name} is clipped: {n} samples sit at its extreme "
-                                   f"({x.max() if np.sum(x == x.max()) == n else x.min():.1f} mm/s^2); lower "
-                                   "accel_per_hz or use the accelerometer's wider range")
+        held = _clipped(rows[:, k])
+        if held is not None:
+            raise CalibrationError(f"{name} is clipped: {held[0]} samples sit at its extreme ({held[1]:.1f} mm/s^2), "
+                                   f"{CLIP_PILE:g} x more than at the next value in; lower accel_per_hz or use the "
+                                   "accelerometer's wider range")
     return ResonanceLog("raw", rows, False, axis_of(path))
+
+
+def _clipped(x: np.ndarray) -> tuple[int, float] | None:
+    """(count, value) of an extreme that holds CLIP_MIN samples and CLIP_PILE times as many as the
+    next value in (values beyond a rail pile up on it; a quantised signal that merely peaks
+    there thins out instead), on a column with at least CLIP_LEVELS distinct values; else None."""
+    vals, counts = np.unique(x, return_counts=True)
+    if len(vals) < CLIP_LEVELS:
+        return None
+    for end, nxt in ((-1, -2), (0, 1)):
+        if counts[end] >= CLIP_MIN and counts[end] > CLIP_PILE * counts[nxt]:
+            return int(counts[end]), float(vals[end])
+    return None
 
 
 def _psd(rows: np.ndarray, normalized: bool, path: Path) -> ResonanceLog:
