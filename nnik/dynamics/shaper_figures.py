@@ -83,33 +83,30 @@ def remaining_vibrations(amps, times_s, freqs: np.ndarray, psd: np.ndarray, zeta
     return worst, vals
 
 
-def _offsets(amps, times_s, scv: float) -> tuple[float, float, float, float]:
-    """The 90 and 180 degree offsets as c + k a: (c90, k90, c180, k180)."""
+def _offsets(amps, times_s, scv: float) -> tuple[float, float, float]:
+    """The 90 degree offset c90 + k90 a and the 180 degree one k180 a, in the acceleration a."""
     a, t = np.asarray(amps, float), np.asarray(times_s, float)
     a = a / a.sum()
-    ts = float(np.sum(a * t))
-    dt = t - ts
+    dt = t - float(np.sum(a * t))  # from the shaper's shift
     late = dt >= 0
     c90 = math.sqrt(2.0) * scv * float(np.sum(a[late] * dt[late]))
     k90 = math.sqrt(2.0) * 0.5 * float(np.sum(a[late] * dt[late] ** 2))
-    k180 = 0.5 * float(np.sum(a * dt**2))
-    return c90, k90, 0.0, k180
+    return c90, k90, 0.5 * float(np.sum(a * dt**2))
 
 
 def smoothing(amps, times_s, accel: float = SMOOTHING_ACCEL, scv: float = SCV) -> float:
     """Klipper's smoothing of a shaper (mm) at accel (mm/s^2) and scv (mm/s)."""
-    c90, k90, c180, k180 = _offsets(amps, times_s, scv)
-    return max(c90 + k90 * accel, c180 + k180 * accel)
+    c90, k90, k180 = _offsets(amps, times_s, scv)
+    return max(c90 + k90 * accel, k180 * accel)
 
 
 def max_accel(amps, times_s, scv: float = SCV, target: float = TARGET_SMOOTHING) -> float:
     """The largest acceleration (mm/s^2) whose smoothing stays within target (0 if the corner
-    velocity alone exceeds it)."""
-    c90, k90, c180, k180 = _offsets(amps, times_s, scv)
-    limits = [(target - c) / k for c, k in ((c90, k90), (c180, k180)) if k > 0]
+    velocity alone exceeds it; unbounded for a single impulse, which never smooths)."""
+    c90, k90, k180 = _offsets(amps, times_s, scv)
     if c90 > target:
         return 0.0
-    return max(0.0, min(limits)) if limits else math.inf
+    return min((target - c90) / k90 if k90 > 0 else math.inf, target / k180 if k180 > 0 else math.inf)
 
 
 def figures(kind: str, f_hz: float, zeta: float = DEFAULT_ZETA, freqs=None, psd=None,
