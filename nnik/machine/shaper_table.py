@@ -11,7 +11,8 @@ takes it (the same keys and defaults).
                                      (zv, mzv, zvd), 0.4 (ei), 0.3 (2hump_ei), 0.2 (3hump_ei)
 
 The older form, [motion] shaper = KIND with the [dynamics] resonance, keeps working: it designs
-KIND for [dynamics] f_hz and zeta on each axis.  A scenario gives one form or the other.
+KIND for [dynamics] f_hz and zeta on each axis.  A scenario gives one form or the other ([motion]
+shaper = "none" beside a [shaper] table is no conflict).
 """
 
 from __future__ import annotations
@@ -48,7 +49,7 @@ def validate_shaper(raw, motion: dict, motion_raw, source: str) -> dict | None:
     without the table.  With the table, motion["shaper"] becomes its label."""
     if raw is None or raw == {}:
         return None
-    if isinstance(motion_raw, dict) and "shaper" in motion_raw:
+    if isinstance(motion_raw, dict) and motion_raw.get("shaper", "none") != "none":
         raise NnikError("give the shaper in [shaper] (Klipper's keys) or in [motion] shaper, not both",
                         source, "[motion] shaper")
     t = validate_table(raw, SHAPER, source, "shaper")

@@ -62,6 +62,11 @@ def test_bad_values_are_one_line_naming_the_key(tmp_path, extra, key):
     assert key in msg and "\n" not in msg, msg
 
 
+def test_motion_shaper_none_beside_the_table_is_no_conflict(tmp_path):
+    s = _load(tmp_path, '[motion]\nshaper = "none"\n[shaper]\nshaper_freq_x = 40\n')
+    assert s.motion["shaper"] == "mzv/none" and default_machine(s).shaper == "mzv/none"
+
+
 def test_older_form_takes_the_new_kinds(tmp_path):
     cfg = default_machine(_load(tmp_path, '[motion]\nshaper = "2hump_ei"\n[dynamics]\nf_hz = 45\nzeta = 0.1\n'))
     assert cfg.shaper == "2hump_ei" and all(len(a) <= 8 for a, _ in cfg.shaper_taps)
