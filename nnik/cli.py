@@ -407,12 +407,13 @@ def build_parser() -> argparse.ArgumentParser:
                    help="scattered (sobol) marks or a k x k grid (k = ceil(sqrt(n)))")
     p.add_argument("--inset-mm", type=float, default=0.05, help="marks this far inside [workspace] (default 0.05)")
     p.add_argument("--seed", type=int, default=0)
-    from nnik.commands import job as job_command
+    from nnik.commands import job as job_command, shaper_calibrate
     from nnik.commands.synth_csv import cmd_synth_csv
 
     p.set_defaults(func=cmd_synth_csv)
 
     job_command.register(sub)
+    shaper_calibrate.register(sub)
     return ap
 
 

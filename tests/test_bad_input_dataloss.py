@@ -76,10 +76,13 @@ def test_evaluate_on_a_finished_run_keeps_the_selection_and_the_pick(picked_run,
 def test_evaluate_after_new_training_drops_the_old_pick(picked_run, tmp_path):
     """The other side: a model.pt that is not the one the pick was made from takes the pick away."""
     run = copy_picked(picked_run, tmp_path / "run")
+    import torch
+
     from nnik.implementations.mlp.train import TrainedModel
 
     m = TrainedModel.load(run / "model.pt")
-    m.train_seconds += 1.0  # other bytes: another model file as far as the pick knows
+    with torch.no_grad():
+        next(m.net.parameters()).view(-1)[0] += 1e-9  # other weights: another model as far as the pick knows
     m.save(run / "model.pt")
     assert main(["evaluate", str(run)]) == 0
     assert not (run / "pick.json").exists() and "selection" not in json.loads((run / "metrics.json").read_text())

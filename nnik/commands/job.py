@@ -61,8 +61,9 @@ def register(sub) -> None:
                    "(default: the scenario's [tool] pen_z_um, 0)")
     p.add_argument("--seg-um", type=int, help="longest arc chord in um (default 500)")
     p.add_argument("--shaper", metavar="KIND",
-                   help="input shaper on the chip: none, zv, mzv, zvd, ei, or auto (the one that meets [motion] "
-                        "max_contour_um at the least job time); default: the scenario's [motion] shaper")
+                   help="input shaper on the chip: none, zv, mzv, zvd, ei, 2hump_ei, 3hump_ei, or auto (the one that "
+                        "meets [motion] max_contour_um at the least job time); default: the scenario's [shaper] table "
+                        "or [motion] shaper")
     p.add_argument("--precompensate", action="store_true",
                    help="write OUTDIR/job/JOB_precompensated.gcode (the job rewritten so the modelled belts' tip "
                         "follows the path) and run that instead")

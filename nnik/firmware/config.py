@@ -11,6 +11,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from nnik.dynamics.shapers import KINDS, design, quantize
+
 TOOLS = ("laser", "pen", "servo", "spindle", "knife", "none")
 # how a job turns the tool on: "s" (M3/M4 with S: a laser; on a pen-like tool, down while on),
 # "z" (down at or below pen_z_um), "e" (Marlin: a move that extrudes), "m300" (a servo pen:
@@ -22,7 +24,9 @@ FEATURES = frozenset({"g5", "g93", "planes", "wcs"})
 # left out (each line that needs one: error 20), as grbl's config.h leaves out what does not fit;
 # a job's build carries exactly what its file uses, and the ATmega2560 build carries everything
 UNO_FEATURES = frozenset({"wcs", "planes"})
-SHAPER_KINDS = ("none", "zv", "mzv", "zvd", "ei")
+SHAPER_KINDS = ("none",) + KINDS
+# taps per axis: 3hump_ei's five impulses, each split between the two samples around it
+MAX_SHAPER_TAPS = 10
 SHAPER_RAM_BUDGET = 512  # bytes of SRAM the shaper's buffers may take on the ATmega328
 MIN_FEED_UM_MIN = 1000
 SERVO_MIN_US, SERVO_MAX_US = 544, 2400  # 0 and 180 degrees, as Arduino's Servo library
@@ -52,9 +56,11 @@ class MachineConfig:
     accel_um_s2: tuple[int, int] = (1_000_000, 1_000_000)
     junction_dev_um: int = 10
     sample_hz: int = 1000
-    shaper: str = "none"
+    shaper: str = "none"  # a kind (both axes), or "x/y" kinds per axis (a [shaper] table)
     # per axis (amplitudes Q15, delays in samples); empty with shaper "none"
     shaper_taps: tuple = ()
+    # per axis (kind, f_hz, zeta) the taps were designed from (their Klipper figures); may be empty
+    shaper_design: tuple = ()
     plan_blocks: int = 8  # the planner's lookahead queue
     rule: str = ""  # the tool rule (RULES); "" = the tool's default: s for a laser, else z
     marlin: bool = False  # G4 P in ms, Marlin's setup G codes noted, E words read
@@ -141,8 +147,8 @@ class MachineConfig:
         if not MIN_FEED_UM_MIN <= self.max_feed_um_min or self.vn_max_q16 >= 1 << 24:
             top = ((1 << 24) - 1) * 60 * self.sample_hz // 65536 // 1000
             raise ValueError(f"max feed must be 1..{top} mm/min at {self.sample_hz} Hz samples")
-        if self.shaper not in SHAPER_KINDS:
-            raise ValueError(f"shaper must be one of {', '.join(SHAPER_KINDS)}")
+        if self.shaper.count("/") > 1 or any(k not in SHAPER_KINDS for k in self.shaper.split("/")):
+            raise ValueError(f"shaper must be one of {', '.join(SHAPER_KINDS)}, or X/Y: one per axis")
         if (self.shaper == "none") != (not self.shaper_taps):
             raise ValueError("shaper taps are needed with a shaper, and none without")
         if self.shaper_taps:
@@ -154,8 +160,8 @@ class MachineConfig:
         if len(self.shaper_taps) != 2:
             raise ValueError("shaper taps: one (amplitudes, delays) per axis")
         for amps, delays in self.shaper_taps:
-            if len(amps) != len(delays) or not 1 <= len(amps) <= 8 or sum(amps) != 32768 or min(amps) < 0:
-                raise ValueError("shaper amplitudes must be 1..8 Q15 taps summing to 32768")
+            if len(amps) != len(delays) or not 1 <= len(amps) <= MAX_SHAPER_TAPS or sum(amps) != 32768 or min(amps) < 0:
+                raise ValueError(f"shaper amplitudes must be 1..{MAX_SHAPER_TAPS} Q15 taps summing to 32768")
             if min(delays) < 0 or max(delays) > 255:
                 raise ValueError("shaper delays must be 0..255 samples")
         vmax_um = self.vn_max_q16 // 65536 + 2
@@ -229,25 +235,39 @@ def default_machine(scn, shaper: str | None = None) -> MachineConfig:
     sh = shaper or mo.get("shaper", "none")
     if sh == "auto":
         raise ValueError("shaper 'auto' is not available yet (it picks by contour error: the lead's part of issue 18)")
-    taps = () if sh == "none" else shaper_taps(sh, dyn, sample_hz)
+    taps, designs = axis_shapers(sh, dyn, getattr(scn, "shaper", None), sample_hz)
     um = lambda key, default, k=1000.0: int(round(float(mo.get(key, default)) * k))  # noqa: E731
     origin = tuple(int(v) for v in (lo + hi) // 2)
     bounds = tuple(tuple(int(v) - o for v, o in zip(e, origin)) for e in (lo, hi))
     return MachineConfig(origin_um=origin, tool=kind, bounds_um=bounds, features=UNO_FEATURES,
                          accel_um_s2=(um("accel_x_mm_s2", 1000.0), um("accel_y_mm_s2", 1000.0)),
                          junction_dev_um=um("junction_deviation_mm", 0.01), max_feed_um_min=um("max_feed_mm_min", 3000.0),
-                         sample_hz=sample_hz, shaper=sh, shaper_taps=taps, **tool)
+                         sample_hz=sample_hz, shaper=sh, shaper_taps=taps, shaper_design=designs, **tool)
 
 
 def shaper_taps(kind: str, dynamics: dict | None, sample_hz: int) -> tuple:
     """Per axis (Q15 amplitudes, delays in samples) of the shaper kind for the [dynamics]
     resonance (nnik.dynamics.shapers.design, then quantize)."""
-    from nnik.dynamics.shapers import design, quantize
+    return axis_shapers(kind, dynamics, None, sample_hz)[0]
 
-    if not dynamics:
-        raise ValueError(f"shaper {kind!r} needs a [dynamics] table (f_hz, zeta)")
-    out = []
-    for f, z in zip(dynamics["f_hz"], dynamics["zeta"]):
-        amps, delays = quantize(design(kind, float(f), float(z)), sample_hz)
-        out.append((tuple(int(a) for a in amps), tuple(int(d) for d in delays)))
-    return tuple(out)
+
+def axis_shapers(name: str, dynamics: dict | None, table: dict | None, sample_hz: int) -> tuple[tuple, tuple]:
+    """(taps, designs) per axis of the machine's shaper name: "none"; the [shaper] table's label
+    (its type, frequency and damping ratio per axis); or a kind designed for the [dynamics]
+    resonance (without [dynamics], at the [shaper] table's frequencies and damping ratios).
+    An unshaped axis of a shaped machine passes its samples through (one tap of 1 at delay 0)."""
+    if name == "none":
+        return (), ()
+    if table and name == table["label"]:
+        designs = tuple(zip(table["type"], table["freq_hz"], table["damping"]))
+    elif dynamics:
+        designs = tuple((name, float(f), float(z)) for f, z in zip(dynamics["f_hz"], dynamics["zeta"]))
+    elif table:
+        designs = tuple((name if t != "none" else "none", f, z) for t, f, z in zip(table["type"], table["freq_hz"], table["damping"]))
+    else:
+        raise ValueError(f"shaper {name!r} needs a [dynamics] table (f_hz, zeta)")
+    taps = []
+    for kind, f, z in designs:
+        amps, delays = ((1 << 15,), (0,)) if kind == "none" else quantize(design(kind, float(f), float(z)), sample_hz)
+        taps.append((tuple(int(a) for a in amps), tuple(int(d) for d in delays)))
+    return tuple(taps), designs

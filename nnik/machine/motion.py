@@ -5,7 +5,8 @@ may do, and how the machine's axes ring.
           junction_deviation_mm          grbl's junction rule (default 0.01 mm)
           max_feed_mm_min                caps F; G0 moves at it (default 3000 mm/min)
           sample_hz                      the fixed-rate trajectory (default 1000 Hz)
-          shaper                         none | zv | mzv | zvd | ei | auto (default none)
+          shaper                         none | zv | mzv | zvd | ei | 2hump_ei | 3hump_ei | auto (default
+                                         none; per axis, as Klipper: the [shaper] table instead)
           max_contour_um                 auto's contour-error target (optional)
 [dynamics] f_hz = [fx, fy], zeta = [zx, zy]
           One base-excited spring-damper per Cartesian axis (seed 003; the model Klipper measures
@@ -16,10 +17,11 @@ may do, and how the machine's axes ring.
 
 from __future__ import annotations
 
+from nnik.dynamics.shapers import KINDS
 from nnik.errors import NnikError
 from nnik.machine.params import Param, validate_table, within
 
-SHAPERS = ("none", "zv", "mzv", "zvd", "ei", "auto")
+SHAPERS = ("none",) + KINDS + ("auto",)
 TICK_HZ = 10_000  # the firmware's stepper interrupt; sample_hz must divide it
 
 MOTION = {

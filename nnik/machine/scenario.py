@@ -14,6 +14,7 @@ from nnik.errors import NnikError
 from nnik.machine.kinematics import KINDS, Mechanism, Workspace
 from nnik.machine.kinematics.measured import check_marks_for_network
 from nnik.machine.motion import validate_motion
+from nnik.machine.shaper_table import validate_shaper
 from nnik.machine.params import MAX_LENGTH_MM, Param, positive, validate_table
 
 
@@ -53,6 +54,7 @@ TOP = {
     "tool": Param("table", default={}),
     "motion": Param("table", default={}),
     "dynamics": Param("table", default={}),
+    "shaper": Param("table", default={}),
 }
 def _extent(v):
     return None if max(abs(v[0]), abs(v[1])) <= MAX_LENGTH_MM else f"must lie within +/-{MAX_LENGTH_MM:g} mm, got {list(v)}"
@@ -150,6 +152,7 @@ class Scenario:
     tool: dict
     motion: dict | None = None  # [motion] with defaults (nnik.machine.motion)
     dynamics: dict | None = None  # [dynamics]: {"f_hz": (fx, fy), "zeta": (zx, zy)}, or None
+    shaper: dict | None = None  # [shaper] per axis (nnik.machine.shaper_table), or None
 
     @property
     def outputs(self) -> list[str]:
@@ -158,13 +161,13 @@ class Scenario:
     @property
     def fingerprint(self) -> str:
         """Hash of what the data and the trained model depend on: the TOML tables other than
-        [export], [target], [tool], [motion], [dynamics] and the description, and for measured data the CSV's bytes. data.npz
+        [export], [target], [tool], [motion], [dynamics], [shaper] and the description, and for measured data the CSV's bytes. data.npz
         and model.pt carry it, so every stage can tell they belong together; changing the
         target or the export options needs no new data."""
         import hashlib
         import json
 
-        kept = {k: v for k, v in self.raw.items() if k not in ("export", "target", "tool", "motion", "dynamics", "description")}
+        kept = {k: v for k, v in self.raw.items() if k not in ("export", "target", "tool", "motion", "dynamics", "shaper", "description")}
         h = hashlib.sha256(json.dumps(kept, sort_keys=True, default=str).encode())
         csv = getattr(self.mechanism, "csv_path", None)
         if csv is not None and Path(csv).is_file():
@@ -231,6 +234,7 @@ class Scenario:
         target = validate_table(top["target"], TARGET, source, "target")
         tool = validate_table(top["tool"], TOOL, source, "tool")
         motion, dynamics = validate_motion(top["motion"], top["dynamics"], source)
+        shaper = validate_shaper(top["shaper"], motion, top["motion"], source)
         if export["tanh"] != "default":
             from nnik.implementations.mlp.tanh import VARIANTS
 
@@ -252,6 +256,7 @@ class Scenario:
             tool=tool,
             motion=motion,
             dynamics=dynamics,
+            shaper=shaper,
         )
 
 

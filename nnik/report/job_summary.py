@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
+from nnik.dynamics.shaper_figures import describe
+
 JOB_HEADER = ("scenario", "job", "segments", "steps", "contour max / RMS (µm)", "IK max (µm)", "rounding max (µm)",
               "chord max (µm)", "chip steps", "cycles/sample", "sample loop CPU", "flash / RAM (B)",
               "tool on / travel (mm)", "tool on-time (s)", "chip tool changes", "job time (s)",
               "peak step rate / limit (Hz)", "planner / shaper", "with belts: contour max / RMS (µm)",
-              "ringing / floor (µm)", "compensation")
+              "ringing / floor (µm)", "compensation", "shapers (Klipper's vibration, smoothing, max accel)")
 
 
 def _um(s: dict | None, rms: bool = False) -> str:
@@ -43,4 +45,5 @@ def job_row(r: dict) -> tuple[str, ...]:
     else:
         belts = ("- (no [dynamics])", "-", "-")
     return (r["scenario"], r["job"], str(r["segments"]), str(r["steps"]), _um(r["contour_um"], True), _um(r["ik_um"]),
-            _um(r.get("rounding_um")), _um(r.get("chord_um")), *chip[:4], *tool, chip[4], *motion, *belts)
+            _um(r.get("rounding_um")), _um(r.get("chord_um")), *chip[:4], *tool, chip[4], *motion, *belts,
+            "; ".join(f"{f['axis']}: {describe(f)}" for f in m.get("shaper_figures", ())) or "-")

@@ -2,8 +2,8 @@
 #include "nnik_shaper.h"
 
 #if NNIK_SH_LEN > 0
-#if NNIK_SH_LEN > 255 || NNIK_SH_N < 1 || NNIK_SH_N > 8
-#error "NNIK_SH_LEN must be 0..255 and NNIK_SH_N 1..8"
+#if NNIK_SH_LEN > 255 || NNIK_SH_N < 1 || NNIK_SH_N > 10
+#error "NNIK_SH_LEN must be 0..255 and NNIK_SH_N 1..10"
 #endif
 #include "nnik_flash.h"
 static NNIK_FLASH const uint16_t AMPS[2][NNIK_SH_N] = NNIK_SH_AMPS;

@@ -2,8 +2,9 @@
  * nnik_shaper.h - input shaping of the sampled Cartesian trajectory, per axis.  Portable C99,
  * integer only; nnik/firmware/gcode/shaper.py repeats it bit for bit.
  *
- * For each axis, NNIK_SH_N impulses of amplitude A_i (Q15, summing to exactly 32768) at delays
- * d_i (whole samples, 0 <= d_i <= NNIK_SH_LEN):
+ * For each axis, NNIK_SH_N (1..10) impulses of amplitude A_i (Q15, summing to exactly 32768) at
+ * delays d_i (whole samples, 0 <= d_i <= NNIK_SH_LEN; an axis with fewer pads with A_i = 0 at
+ * d_i = 0, and an unshaped axis of a shaped machine is one tap of 32768 at 0):
  *     shaped[n] = p[n] + ((16384 - sum_i A_i * W_i[n]) >> 15),   W_i[n] = p[n] - p[n - d_i]
  * (an arithmetic shift: floor), which is round half up of sum_i A_i * p[n - d_i] / 32768.  Before
  * the first sample every past p is the start point.  The memory holds the per-sample increments

@@ -27,7 +27,7 @@ from nnik.dynamics.precompensate import gcode as pc_gcode
 from nnik.dynamics.precompensate import precompensated
 from nnik.dynamics.shapers import KINDS
 from nnik.files.atomic_write import write_file_atomic
-from nnik.firmware.config import shaper_taps
+from nnik.firmware.config import axis_shapers
 from nnik.firmware.gcode.motion import interpret, plan_steps
 from nnik.firmware.gcode.steps import model_events
 from nnik.firmware.gcode.tip import tip_report
@@ -39,11 +39,11 @@ PC_EVERY_S = 0.005  # a precompensated G1 line every 5 ms: 115,200 baud sends on
 ROBUST = {"f +20 %": (1.2, 1.0), "f -20 %": (0.8, 1.0), "zeta / 2": (1.0, 0.5)}
 
 
-def with_shaper(cfg, kind: str, dyn: dict):
-    """cfg with the shaper kind designed for dyn (ValueError: one line, e.g. overdamped)."""
-    if kind == "none":
-        return replace(cfg, shaper="none", shaper_taps=())
-    return replace(cfg, shaper=kind, shaper_taps=shaper_taps(kind, dyn, cfg.sample_hz))
+def with_shaper(cfg, kind: str, dyn: dict, table: dict | None = None):
+    """cfg with the shaper kind designed for dyn, or the [shaper] table's per-axis shapers when
+    kind is its label (ValueError: one line, e.g. overdamped)."""
+    taps, designs = axis_shapers(kind, dyn, table, cfg.sample_hz)
+    return replace(cfg, shaper=kind, shaper_taps=taps, shaper_design=designs)
 
 
 def model_run(lines: list[str], cfg, ik):
@@ -115,7 +115,7 @@ def compare(scn, cfg, lines: list[str], ik, dyn: dict, source: str, methods=METH
         if m == "precompensated":
             continue
         try:
-            c = with_shaper(cfg, m, dyn)
+            c = with_shaper(cfg, m, dyn, getattr(scn, "shaper", None))
             runs[m] = (c,) + model_run(lines, c, ik)
         except ValueError as exc:
             out[m] = {"error": str(exc)}
@@ -197,7 +197,8 @@ def job_dynamics(scn, cfg, lines: list[str], ik, shaper: str | None, precompensa
     dyn = scn.dynamics
     asked = "precompensated" if precompensate else (shaper or (scn.motion or {}).get("shaper", "none"))
     keep = ("none", asked) if asked != "auto" else tuple(METHODS)
-    res = compare(scn, cfg, lines, ik, dyn, source, keep=keep)
+    methods = METHODS + ((asked,) if asked not in METHODS + ("auto",) else ())  # + the [shaper] table's
+    res = compare(scn, cfg, lines, ik, dyn, source, methods=methods, keep=keep)
     if asked == "auto":
         pick = auto_pick(res, (scn.motion or {}).get("max_contour_um"))
         chosen = pick["method"]

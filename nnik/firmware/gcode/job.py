@@ -16,6 +16,8 @@ from pathlib import Path
 
 import numpy as np
 
+from nnik.dynamics.shaper_figures import axis_figures
+from nnik.dynamics.shapers import KINDS
 from nnik.files.atomic_write import write_file_atomic
 from nnik.files.outdir import JOB_DIR
 from nnik.progress import bar
@@ -31,7 +33,7 @@ from nnik.firmware.gcode.plot import job_png
 from nnik.firmware.gcode.steps import chip_events, chip_tool_events, model_events, model_tool_events
 
 CLOCK_HZ = 16_000_000
-SHAPER_CHOICES = ("none", "zv", "mzv", "zvd", "ei", "auto")
+SHAPER_CHOICES = ("none",) + KINDS + ("auto",)
 
 
 def tool_report(seg, cfg: MachineConfig) -> dict:
@@ -148,9 +150,10 @@ def write_step_counts(path: Path, steps: np.ndarray, start: np.ndarray) -> Path:
     return path
 
 
-def motion_report(seg, cfg: MachineConfig) -> dict:
+def motion_report(seg, cfg: MachineConfig, dyn: dict | None = None) -> dict:
     """The job's time, its peak step rate against the stepper's limit (one step per tick per
-    motor), the samples stretched beyond their ticks, and the settings behind them."""
+    motor), the samples stretched beyond their ticks, and the settings behind them (with each
+    axis's shaper and its Klipper figures, the vibration on the [dynamics] resonance dyn)."""
     samp = seg.kind == 0
     rate = np.abs(seg.delta).max(1)[samp] * cfg.tick_hz / np.maximum(seg.ticks[samp], 1) if samp.any() else np.zeros(1)
     return {"job_s": float(seg.ticks.sum() / cfg.tick_hz), "samples": int(samp.sum()),
@@ -159,7 +162,8 @@ def motion_report(seg, cfg: MachineConfig) -> dict:
             "sample_hz": cfg.sample_hz, "accel_mm_s2": [a / 1000.0 for a in cfg.accel_um_s2],
             "junction_deviation_mm": cfg.junction_dev_um / 1000.0, "max_feed_mm_min": cfg.max_feed_um_min / 1000.0,
             "shaper": cfg.shaper, "shaper_taps": [list(map(list, t)) for t in cfg.shaper_taps],
-            "shaper_ram_bytes": cfg.shaper_ram_bytes, "plan_blocks": cfg.plan_blocks}
+            "shaper_ram_bytes": cfg.shaper_ram_bytes, "plan_blocks": cfg.plan_blocks,
+            "shaper_figures": axis_figures(cfg.shaper_design if cfg.shaper != "none" else (), dyn)}
 
 
 def machine_for(scn, shaper: str | None, seg_um: int | None) -> MachineConfig:
@@ -198,7 +202,7 @@ def run_job(outdir: Path, job_path: Path, seg_um: int | None = None, use_chip: b
     if shaper is not None and shaper not in SHAPER_CHOICES:
         raise NnikError(f"unknown shaper {shaper!r}; choose one of {', '.join(SHAPER_CHOICES)}", None, "--shaper")
     asked = "precompensated" if precompensate else (shaper or (scn.motion or {}).get("shaper", "none"))
-    if asked != "none" and not scn.dynamics:
+    if asked != "none" and not scn.dynamics and not getattr(scn, "shaper", None):
         where = "--precompensate" if precompensate else "--shaper" if shaper else "[motion] shaper"
         raise NnikError(f"{'precompensation' if precompensate else 'shaper ' + repr(asked)} needs a [dynamics] table "
                         f"(f_hz, zeta) in {scn.source}", None, where)
@@ -240,7 +244,7 @@ def run_job(outdir: Path, job_path: Path, seg_um: int | None = None, use_chip: b
                "machine": {"origin_um": list(cfg.origin_um), "seg_um": cfg.seg_um, "tick_hz": cfg.tick_hz,
                            "sample_hz": cfg.sample_hz, "shaper": cfg.shaper,
                            "tool": cfg.tool, "tool_defines": cfg.defines()},
-               "tool": tool_report(seg, cfg), "motion": motion_report(seg, cfg),
+               "tool": tool_report(seg, cfg), "motion": motion_report(seg, cfg, scn.dynamics),
                **contour_report(scn, cfg, plan, seg, events)}
         if res["clamped"]:
             raise NnikError(f"{res['clamped']} samples outside the IK's domain although the job fits the workspace: "

@@ -100,6 +100,25 @@ def zvd_firmware(firmware, tmp_path_factory):
     return out
 
 
+@pytest.fixture(scope="session")
+def hump_firmware(firmware, tmp_path_factory):
+    """The CoreXY G-code firmware with a shaper per axis as a [shaper] table gives it: 3HUMP_EI
+    at 45 Hz (zeta 0.1) on X, 2HUMP_EI at 38 Hz (zeta 0.15) on Y (entries as in firmware)."""
+    from dataclasses import replace
+
+    from nnik.firmware.config import axis_shapers
+
+    run, lib, _, ik, _ = firmware["corexy_nonlinear"]
+    table = {"type": ("3hump_ei", "2hump_ei"), "freq_hz": (45.0, 38.0), "damping": (0.1, 0.15), "label": "3hump_ei/2hump_ei"}
+    cfg = lib["machine"]
+    taps, designs = axis_shapers(table["label"], None, table, cfg.sample_hz)
+    cfg = replace(cfg, shaper=table["label"], shaper_taps=taps, shaper_design=designs)
+    work = tmp_path_factory.mktemp("corexy_hump")
+    lib2 = export_arduino(run, work / "lib", cfg)
+    fw = chip.build_sketch(work / "lib", "corexy_nonlinear_gcode", work / "build", chip.file_run_defines(cfg))
+    return run, lib2, fw, ik, work / "build"
+
+
 def run_both(entry, lines: list[str]):
     """The lines through the Python model and the simulated chip: (plan, segments, chip run), with
     the chip's answers, segments and every step checked against the model's, and the run's end

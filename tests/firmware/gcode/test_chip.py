@@ -85,6 +85,20 @@ def test_every_step_matches_with_zvd_shaping(zvd_firmware, scenario, job):
     assert entry[2].ram_bytes <= chip.RAM_BYTES - 256
 
 
+@pytest.mark.parametrize("job", ["l_path", "circle"])
+def test_every_step_matches_with_a_hump_ei_shaper_per_axis(hump_firmware, job):
+    """3HUMP_EI on X and 2HUMP_EI on Y (up to 10 and 8 taps: the largest shapers) on the
+    Uno: every step and segment equals the model's, and the build fits with 256 B of stack."""
+    from tests.firmware.gcode.conftest import run_both
+
+    cfg = hump_firmware[1]["machine"]
+    assert cfg.shaper == "3hump_ei/2hump_ei" and max(len(a) for a, _ in cfg.shaper_taps) >= 8
+    plan, seg, res = run_both(hump_firmware, faster([ln.decode('latin-1') for ln in split_lines((JOBS / f"{job}.gcode").read_bytes())]))
+    assert np.abs(seg.ends_um - seg.planned_um).max() > 0
+    fw = hump_firmware[2]
+    assert fw.flash_bytes <= chip.FLASH_BYTES and fw.ram_bytes <= chip.RAM_BYTES - 256
+
+
 def test_shipped_job_end_to_end_with_selftest_rate_and_plot(firmware):
     run = firmware["corexy_nonlinear"][0]
     res = run_job(run, JOBS / "l_path.gcode", use_chip=True)

@@ -9,6 +9,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from nnik.dynamics.shapers import KINDS
 from nnik.firmware.config import default_machine
 from nnik.firmware.gcode.compensation import auto_pick, compare, job_dynamics, model_run
 from nnik.firmware.gcode.job_input import read_job as read_bytes
@@ -36,7 +37,7 @@ def l_path(machine):
 def test_every_shaper_cuts_the_ringing_and_the_best_method_halves_the_contour(l_path):
     none = l_path["none"]
     assert none["ringing_um"]["max"] > 2 * none["ringing_floor_um"]["max"]  # the belts do ring
-    for m in ("zv", "mzv", "zvd", "ei"):
+    for m in KINDS:
         assert l_path[m]["ringing_um"]["max"] < 0.5 * none["ringing_um"]["max"], m
         assert l_path[m]["residual_pct"] < 35, m
     best = min((m for m in l_path if "contour_um" in l_path[m]), key=lambda m: l_path[m]["contour_um"]["max"])
@@ -104,7 +105,7 @@ def test_job_reports_the_belts_and_auto_says_what_it_traded(corexy_run):
     res = run_job(corexy_run, JOBS / "l_path.gcode", use_chip=False, shaper="auto")
     d = res["dynamics"]
     assert d["pick"]["met"] and d["chosen"] == d["pick"]["method"] and Path(d["png"]).is_file()
-    assert res["machine"]["shaper"] == (d["chosen"] if d["chosen"] in ("zv", "mzv", "zvd", "ei") else "none")
+    assert res["machine"]["shaper"] == (d["chosen"] if d["chosen"] in KINDS else "none")
     assert res["tip"]["contour_um"]["max"] == d["methods"][d["chosen"]]["contour_um"]["max"]
     # the tip includes the belts: never better than the steps themselves by more than the microstep blur
     assert res["tip"]["contour_um"]["max"] > 0.5 * res["contour_um"]["max"] or d["chosen"] != "none"
@@ -112,3 +113,22 @@ def test_job_reports_the_belts_and_auto_says_what_it_traded(corexy_run):
     path = Path(pc["dynamics"]["pick"]["gcode"])
     assert path.is_file() and path.name == "l_path_precompensated.gcode" and pc["machine"]["shaper"] == "none"
     assert pc["segments"] > res["segments"] * 0.9  # the rewritten job runs, sample by sample
+
+
+def test_a_shaper_table_runs_beside_the_kinds_with_klippers_figures(machine):
+    """A [shaper] table's per-axis shapers (here 3HUMP_EI on X, MZV on Y) are one more method,
+    and the machine that runs them carries each axis's Klipper figures on the belts' resonance."""
+    from nnik.firmware.gcode.job import motion_report
+
+    scn, cfg, ik = machine
+    table = {"type": ("3hump_ei", "mzv"), "freq_hz": (40.0, 41.0), "damping": (0.1, 0.1), "label": "3hump_ei/mzv"}
+    scn = replace(scn, shaper=table)
+    res = compare(scn, cfg, read_job(JOBS / "l_path.gcode"), ik, scn.dynamics, "l_path", methods=("none", "3hump_ei/mzv"),
+                  robust=False)
+    run_cfg, _, seg, _ = res["3hump_ei/mzv"]["run"]
+    assert run_cfg.shaper == "3hump_ei/mzv" and run_cfg.shaper_design == (("3hump_ei", 40.0, 0.1), ("mzv", 41.0, 0.1))
+    assert res["3hump_ei/mzv"]["ringing_um"]["max"] < 0.5 * res["none"]["ringing_um"]["max"]
+    figs = motion_report(seg, run_cfg, scn.dynamics)["shaper_figures"]
+    assert [f["axis"] for f in figs] == ["x", "y"] and [f["type"] for f in figs] == ["3hump_ei", "mzv"]
+    assert figs[0]["smoothing_mm"] > figs[1]["smoothing_mm"] and figs[0]["max_accel_mm_s2"] < figs[1]["max_accel_mm_s2"]
+    assert all(0 <= f["vibration"] < 0.05 for f in figs)

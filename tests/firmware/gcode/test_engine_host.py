@@ -221,17 +221,18 @@ def test_tool_output_equal_on_the_host(corexy_lib, tool):
     assert sum(plan.dwell) > 0 and sum(1 for d in plan.dwell if d == 1) > 3  # tool changes at rest
 
 
-SHAPERS = ("none", "zv", "mzv", "zvd", "ei")
+# every kind on both axes, and per axis as a [shaper] table gives it (3HUMP_EI: 9 and 10 taps)
+SHAPERS = ("none", "zv", "mzv", "zvd", "ei", "2hump_ei", "3hump_ei", "3hump_ei/mzv", "none/2hump_ei")
 
 
 def shaped_cfg(cfg, kind: str, f_hz=(40.0, 33.0), zeta=(0.1, 0.07)):
     from dataclasses import replace
 
-    from nnik.firmware.config import shaper_taps
+    from nnik.firmware.config import axis_shapers
 
-    if kind == "none":
-        return replace(cfg, shaper="none", shaper_taps=())
-    return replace(cfg, shaper=kind, shaper_taps=shaper_taps(kind, {"f_hz": f_hz, "zeta": zeta}, cfg.sample_hz))
+    table = {"type": tuple(kind.split("/")), "freq_hz": f_hz, "damping": zeta, "label": kind} if "/" in kind else None
+    taps, designs = axis_shapers(kind, None if table else {"f_hz": f_hz, "zeta": zeta}, table, cfg.sample_hz)
+    return replace(cfg, shaper=kind, shaper_taps=taps, shaper_design=designs)
 
 
 @pytest.mark.parametrize("kind", SHAPERS)
