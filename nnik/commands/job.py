@@ -7,29 +7,10 @@ from pathlib import Path
 from rich.console import Console
 from rich.table import Table
 
+from nnik.commands import option_types as opt
 from nnik.errors import NnikError
 
 console = Console()
-
-
-def _offset(text: str) -> tuple[float, float]:
-    try:
-        x, y = (float(v) for v in text.split(","))
-    except ValueError:
-        raise NnikError(f"--offset needs X,Y (two numbers), not {text!r}", None, "--offset") from None
-    if not all(abs(v) < 1e6 for v in (x, y)):
-        raise NnikError("--offset must be finite and under 10^6", None, "--offset")
-    return x, y
-
-
-def _scale(text: str) -> float:
-    try:
-        s = float(text)
-    except ValueError:
-        raise NnikError(f"--scale needs a number, not {text!r}", None, "--scale") from None
-    if not 1 / 65536 <= s <= 256:
-        raise NnikError("--scale must be 1/65536..256", None, "--scale")
-    return s
 
 
 def register(sub) -> None:
@@ -47,8 +28,8 @@ def register(sub) -> None:
                    "tool-on length and every noted word; writes nothing")
     p.add_argument("--fit", action="store_true", help="scale the job down uniformly (never up) to fit the workspace and "
                    "centre it")
-    p.add_argument("--scale", type=_scale, help="scale the job by S about the work origin")
-    p.add_argument("--offset", type=_offset, metavar="X,Y", help="move the job by X,Y in its units (mm, or inches for a "
+    p.add_argument("--scale", type=opt.SCALE, help="scale the job by S about the work origin")
+    p.add_argument("--offset", type=opt.pair, metavar="X,Y", help="move the job by X,Y in its units (mm, or inches for a "
                    "G20 job)")
     p.add_argument("--flavour", help="grbl, marlin or linuxcnc (default: detected from the file)")
     p.add_argument("--tool", help="the machine's tool: laser, pen, servo, spindle, knife or none (default: the "
@@ -56,9 +37,9 @@ def register(sub) -> None:
     p.add_argument("--tool-rule", choices=("s", "z", "e", "m300", "none"),
                    help="how the job turns the tool on: s (M3/M4 S), z (Z at or below the threshold), e (Marlin: a "
                         "move that extrudes), m300 (M300 S servo pen), none (default: from the tool and the file)")
-    p.add_argument("--tool-z", type=float, metavar="MM", help="a pen, spindle or knife is down at or below this Z "
+    p.add_argument("--tool-z", type=opt.TOOL_Z, metavar="MM", help="a pen, spindle or knife is down at or below this Z "
                    "(default: the scenario's [tool] pen_z_um, 0)")
-    p.add_argument("--seg-um", type=int, help="longest arc chord in um (default 500)")
+    p.add_argument("--seg-um", type=opt.SEG_UM, help="longest arc chord in um (default 500)")
     p.add_argument("--shaper", metavar="KIND",
                    help="input shaper on the chip: none, zv, mzv, zvd, ei, or auto (the one that meets [motion] "
                         "max_contour_um at the least job time); default: the scenario's [motion] shaper")

@@ -26,6 +26,8 @@ from nnik.machine.kinematics.base import Workspace
 from nnik.machine.scenario import Scenario
 
 EDGE_MARGIN_MM = 0.05  # keep noisy measurements inside the workspace
+N_MIN, N_MAX = 20, 1_000_000  # marks: enough for a fit, few enough for memory
+NOISE_UM_MAX = 1e4  # 1 sigma: 10 mm of noise is no measurement
 READINGS = ("commanded", "rounded")
 SAMPLING = ("sobol", "grid")
 
@@ -37,8 +39,8 @@ def synthesize_measurements(scn: Scenario, path: Path, n: int, noise_um: float, 
     m = scn.mechanism
     if not m.analytic:
         raise NnikError("synth-csv needs an analytic machine to measure", scn.source, "[mechanism] kind")
-    if not (20 <= n <= 1_000_000) or not 0 <= noise_um <= 1e4:
-        raise NnikError(f"need 20 <= n <= 1000000 and 0 <= noise <= 10000 um (got n={n}, noise={noise_um})")
+    if not (N_MIN <= n <= N_MAX) or not 0 <= noise_um <= NOISE_UM_MAX:
+        raise NnikError(f"need {N_MIN} <= n <= {N_MAX} and 0 <= noise <= {NOISE_UM_MAX:g} um (got n={n}, noise={noise_um})")
     if readings not in READINGS or sampling not in SAMPLING:
         raise NnikError(f"readings must be one of {', '.join(READINGS)} and sampling one of {', '.join(SAMPLING)}")
     ws = scn.workspace
