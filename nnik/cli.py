@@ -202,7 +202,7 @@ def _evaluated_dir(model_dir) -> Path:
 
 def cmd_export(args) -> None:
     out = _evaluated_dir(args.model_dir)
-    if getattr(args, "arduino", None):
+    if args.arduino is not None:
         from nnik.files.pick_state import require_deliverable
 
         # the library is firmware: only a finished pick whose c/NAME.c is the verified C (refused
@@ -210,7 +210,7 @@ def cmd_export(args) -> None:
         require_deliverable(out, "export --arduino")
     im, _ = pipeline.export(out)
     console.print(f"wrote {out / pipeline.C_DIR}/{im.name}.h and {im.name}.c ({im.weights_bytes()} bytes of tables)")
-    if getattr(args, "arduino", None):
+    if args.arduino is not None:
         from nnik.firmware.arduino import export_arduino
 
         lib = export_arduino(out, Path(args.arduino))
@@ -418,6 +418,7 @@ def build_parser() -> argparse.ArgumentParser:
     from nnik.commands import job as job_command
 
     job_command.register(sub)
+    opt.check_paths(ap)
     return ap
 
 

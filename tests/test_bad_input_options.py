@@ -46,7 +46,7 @@ def typed_options():
     """(command, flag, action) of every option that converts its value with a type."""
     for name, p in commands().items():
         for a in p._actions:
-            if a.option_strings and a.type is not None and a.type is not str:
+            if a.option_strings and a.type not in (None, str, opt.path):
                 yield name, a.option_strings[-1] if a.option_strings[-1].startswith("--") else a.option_strings[0], a
 
 
@@ -121,3 +121,32 @@ def test_argparse_complaints_are_one_line_too(capsys, tmp_path):
     fails(capsys, ["nosuchcommand"], "invalid choice")
     fails(capsys, ["verify", tmp_path, "--target", "z80"], "--target", "invalid choice")
     fails(capsys, ["synth-csv", tmp_path / "s.toml", "-o", tmp_path / "x.csv", "--seed", "-1"], "--seed", "must be in")
+
+
+def path_arguments():
+    for name, p in commands().items():
+        for a in p._actions:
+            if a.type is opt.path:
+                yield name, a
+
+
+def test_every_file_argument_refuses_an_empty_path(capsys, tmp_path):
+    """`export --arduino ""` was accepted (and wrote nothing): every path argument refuses ''."""
+    found = set()
+    for name, a in path_arguments():
+        argv = argv_with(name, "--", "", tmp_path)[:-1]  # the required arguments, then this one empty
+        if a.option_strings:
+            argv += [a.option_strings[-1], ""]
+        else:
+            k = [b.dest for b in commands()[name]._actions if not b.option_strings and b.dest != "help"].index(a.dest)
+            argv[1 + k] = ""
+        fails(capsys, argv, "needs a path", watch=tmp_path)
+        found.add((name, a.dest))
+    assert ("export", "arduino") in found and ("run", "outdir") in found and ("job", "job") in found
+
+
+def test_no_path_argument_is_left_unchecked():
+    for name, p in commands().items():
+        for a in p._actions:
+            if a.dest in opt.PATH_DESTS and not a.choices:
+                assert a.type is opt.path, (name, a.dest)

@@ -92,3 +92,26 @@ NOISE_UM = Number(float, between(0.0, synth.NOISE_UM_MAX, " um"))
 INSET_MM = Number(float, between(synth.EDGE_MARGIN_MM, ranges.MAX_LENGTH_MM, " mm"))  # and below half the workspace
 SEED = of_param(DATASET["seed"])  # the scenario's [dataset] seed range
 MAX_ERROR, MAX_CYCLES, MAX_FLASH_BYTES = (of_param(TARGET[k]) for k in ("max_error", "max_cycles", "max_flash_bytes"))
+
+
+def path(text: str) -> str:
+    """A file or directory argument: never empty (an empty path is the current directory, which
+    nobody means), never a NUL byte (no file system takes one)."""
+    if not text.strip():
+        raise argparse.ArgumentTypeError("needs a path, got an empty one")
+    if "\0" in text:
+        raise argparse.ArgumentTypeError("a path cannot hold a NUL byte")
+    return text
+
+
+PATH_DESTS = ("scenario", "model_dir", "outdir", "output", "arduino", "job", "target")
+
+
+def check_paths(parser: argparse.ArgumentParser) -> None:
+    """Every file and directory argument of every command (found by its name) takes `path`."""
+    for a in parser._actions:
+        if isinstance(a, argparse._SubParsersAction):
+            for p in a.choices.values():
+                check_paths(p)
+        elif a.dest in PATH_DESTS and a.type is None and not a.choices:
+            a.type = path
