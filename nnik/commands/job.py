@@ -52,9 +52,17 @@ def register(sub) -> None:
     p.set_defaults(func=cmd_job)
 
 
-def _model_dir(args) -> Path:
-    from nnik import pipeline
+def _model_dir(args):
+    """(the model directory, the scenario whose [motion], [dynamics] and [tool] the job runs with).
 
+    With a scenario TOML its model directory must hold a model of that very machine (the same
+    fingerprint: name, mechanism, actuator, workspace, data and network); the TOML's own [motion],
+    [dynamics] and [tool], which the trained IK does not depend on, are the truth, edits included.
+    With a model directory: the scenario it was trained with (its model.pt's copy)."""
+    from nnik import pipeline
+    from nnik.firmware.ik_oracle import load_scenario_of
+
+    scn = None
     if Path(args.scenario).is_dir():
         out = Path(args.scenario)
         if args.outdir and Path(args.outdir).resolve() != out.resolve():
@@ -67,7 +75,19 @@ def _model_dir(args) -> Path:
         out = Path(args.outdir) if args.outdir else pipeline.default_outdir(scn)
     if not (out / pipeline.MODEL_FILE).is_file():
         raise NnikError(f"no trained model (run `nnik run {args.scenario}` first)", str(out))
-    return out
+    if scn is None:
+        return out, load_scenario_of(out)
+    trained = load_scenario_of(out)
+    if trained.fingerprint != scn.fingerprint:
+        same = "a changed machine of the same name" if trained.name == scn.name else f"machine {scn.name!r}"
+        raise NnikError(f"{args.scenario} describes {same}, but {out} holds a model of machine {trained.name!r} "
+                        f"(trained from {trained.source}); give the model's own scenario, or `nnik run` this one first",
+                        args.scenario)
+    changed = [t for t in ("motion", "dynamics", "tool") if scn.raw.get(t) != trained.raw.get(t)]
+    if changed:
+        console.print(f"{', '.join(f'[{t}]' for t in changed)} from {args.scenario}, changed since training (the "
+                      "trained IK does not depend on them)", markup=False)
+    return out, scn
 
 
 def print_gcode_summary(g: dict) -> None:
@@ -91,14 +111,15 @@ def cmd_job(args) -> None:
     from nnik.firmware.gcode.job_input import JobOptions
     from nnik.report.job_summary import JOB_HEADER, job_row
 
-    out = _model_dir(args)
+    out, scn = _model_dir(args)
     from nnik.files.pick_state import require_deliverable
 
     require_deliverable(out, "job")  # the job runs the firmware: only the verified pick, never the MLP instead
     opts = JobOptions(flavour=args.flavour, tool=args.tool, tool_rule=args.tool_rule, tool_z_mm=args.tool_z, fit=args.fit,
                       scale=args.scale, offset=args.offset)
     res = run_job(out, Path(args.job), seg_um=args.seg_um, use_chip=False if args.no_chip else None,
-                  shaper=args.shaper, precompensate=args.precompensate, opts=opts, check=args.check, mcu=args.mcu)
+                  shaper=args.shaper, precompensate=args.precompensate, opts=opts, check=args.check, mcu=args.mcu,
+                  scenario=scn)
     if args.check:
         print_gcode_summary(res)
         c = res["check"]

@@ -182,7 +182,7 @@ def machine_for(scn, shaper: str | None, seg_um: int | None) -> MachineConfig:
 
 def run_job(outdir: Path, job_path: Path, seg_um: int | None = None, use_chip: bool | None = None,
             shaper: str | None = None, precompensate: bool = False, opts: JobOptions | None = None,
-            check: bool = False, mcu: str = "atmega328p") -> dict:
+            check: bool = False, mcu: str = "atmega328p", scenario=None) -> dict:
     """Run a job; use_chip None: on the simulated chip when the toolchain is there (mcu: the Uno's
     atmega328p or the Mega's atmega2560; the sketches are built while the Python model runs, and
     the job runs on simavr while the plot is drawn); shaper:
@@ -190,11 +190,12 @@ def run_job(outdir: Path, job_path: Path, seg_um: int | None = None, use_chip: b
     job rewritten offline for the belts (nnik.firmware.gcode.compensation); opts: flavour, tool,
     tool rule and the job's frame (--fit, --scale, --offset); check: parse and plan only (grbl's
     $C), no IK, no chip, nothing written.  With a [dynamics] table every method is compared on
-    the tip and the chosen one goes to the chip."""
+    the tip and the chosen one goes to the chip.  scenario: the machine's [motion], [dynamics] and
+    [tool] (default: the model's, as it was trained; `nnik job SCENARIO.toml` gives the TOML's)."""
     from nnik.firmware.gcode import chip
 
     outdir, job_path = Path(outdir), Path(job_path)
-    scn = load_scenario_of(outdir)
+    scn = scenario if scenario is not None else load_scenario_of(outdir)
     if shaper is not None and shaper not in SHAPER_CHOICES:
         raise NnikError(f"unknown shaper {shaper!r}; choose one of {', '.join(SHAPER_CHOICES)}", None, "--shaper")
     asked = "precompensated" if precompensate else (shaper or (scn.motion or {}).get("shaper", "none"))
