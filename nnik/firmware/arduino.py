@@ -16,6 +16,7 @@ import jinja2
 import numpy as np
 
 from nnik import pipeline
+from nnik.errors import NnikError
 from nnik.machine.domain import domain_um
 from nnik.emit.templating import CODEGEN, RUNTIME, environment
 from nnik.firmware.config import MachineConfig, default_machine
@@ -50,13 +51,24 @@ def golden_vectors(scn, n: int = N_GOLDEN, seed: int = 0) -> np.ndarray:
     return np.concatenate([np.asarray(fixed, dtype=np.int64), rand])
 
 
+MARKER = ".nnik-arduino-library"  # in every folder this export wrote: the folder it may replace
+
+
 def export_arduino(outdir: Path, libdir: Path, machine: MachineConfig | None = None) -> dict:
-    """Write the library; returns {"libname", "dir", "name", "machine", "golden"}."""
-    outdir, libdir = Path(outdir), Path(libdir)
+    """Write the library as a whole (nnik.files.replace_dir: an earlier export's folder is replaced
+    with nothing of it left, a folder nnik did not write is refused); returns {"libname", "dir",
+    "name", "machine", "golden"}."""
+    from nnik.files.replace_dir import check_replaceable, staged_folder
+
+    outdir, final = Path(outdir), Path(libdir)
+    check_replaceable(final, MARKER, "Arduino library")
     scn = load_scenario_of(outdir)
     name = scn.name
     c_dir = ik_sources(outdir, name)
-    machine = machine or default_machine(scn)
+    try:
+        machine = machine or default_machine(scn)
+    except ValueError as exc:  # [motion] shaper "auto" picks per job: a library needs a fixed one
+        raise NnikError(f"{exc}; the library needs a fixed shaper", scn.source, "[motion] shaper") from None
     ik = ik_oracle(outdir)
     vec = golden_vectors(scn)
     out, flags = ik(vec)
@@ -67,13 +79,22 @@ def export_arduino(outdir: Path, libdir: Path, machine: MachineConfig | None = N
     else:
         what = "MLP " + "-".join(map(str, _shape(outdir)))
         hash_ = pipeline.load_metrics(outdir).get("fixed", {}).get("model_hash", "-")
+    libname = f"nnik_{name}"
+    with staged_folder(final, MARKER, "Arduino library", f"{libname} {VERSION}: written by nnik export --arduino\n") \
+            as libdir:
+        _write_library(libdir, final, scn, c_dir, machine, ik, rows, what, hash_, libname)
+    return {"libname": libname, "dir": str(final), "name": name, "machine": machine, "golden": len(rows)}
+
+
+def _write_library(libdir: Path, final: Path, scn, c_dir: Path, machine: MachineConfig, ik, rows, what: str,
+                   hash_: str, libname: str) -> None:
+    name = scn.name
     src = libdir / "src"
     src.mkdir(parents=True, exist_ok=True)
     for f in [c_dir / f"{name}.c", c_dir / f"{name}.h", *sorted(RUNTIME.glob("*.h"))]:
         shutil.copy(f, src / f.name)
     for f in ENGINE_FILES:
         shutil.copy(ARDUINO / "src" / f, src / f)
-    libname = f"nnik_{name}"
     ctx = dict(name=name, scenario=c_comment_safe(scn.source), libname=libname, version=VERSION,
                shape=c_comment_safe(what).replace('"', "'"),
                description=c_comment_safe(scn.raw.get("description") or name), unit=scn.unit, outputs=scn.outputs, model_hash=hash_,
@@ -95,8 +116,7 @@ def export_arduino(outdir: Path, libdir: Path, machine: MachineConfig | None = N
         files[libdir / "examples" / example / "Makefile"] = "Makefile.j2"
     for path, tmpl in files.items():
         path.parent.mkdir(parents=True, exist_ok=True)
-        path.write_text(env.get_template(tmpl).render(**ctx, example=path.parent.name, libdir_name=libdir.resolve().name))
-    return {"libname": libname, "dir": str(libdir), "name": name, "machine": machine, "golden": len(rows)}
+        path.write_text(env.get_template(tmpl).render(**ctx, example=path.parent.name, libdir_name=final.resolve().name))
 
 
 def homepage() -> str:
