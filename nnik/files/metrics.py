@@ -32,6 +32,9 @@ def read_metrics(path: Path) -> dict:
     if not isinstance(m, dict):
         raise NnikError(f"corrupt metrics file (a JSON {type(m).__name__}, not an object); run `nnik evaluate` again",
                         str(path))
+    from nnik.files import json_shape
+
+    json_shape.check(m, json_shape.METRICS, str(path), "run `nnik evaluate` again")
     return m
 
 
