@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 
 from rich.console import Console
@@ -119,7 +120,7 @@ def cmd_job(args) -> None:
                       scale=args.scale, offset=args.offset)
     res = run_job(out, Path(args.job), seg_um=args.seg_um, use_chip=False if args.no_chip else None,
                   shaper=args.shaper, precompensate=args.precompensate, opts=opts, check=args.check, mcu=args.mcu,
-                  scenario=scn)
+                  scenario=scn, warn=lambda w: print(f"nnik: warning: {w}", file=sys.stderr, flush=True))
     if args.check:
         print_gcode_summary(res)
         c = res["check"]

@@ -71,3 +71,24 @@ def test_the_longest_line_fits_whatever_the_line_end(picked_run, tmp_path, capsy
     assert "check: 2 lines" in check(capsys, picked_run, f)
     f.write_bytes(b"G21" + end + longest + b"0" + end)
     fails(capsys, ["job", picked_run, f, "--check"], ":2: error:11")
+
+
+def test_a_job_slow_for_its_length_is_said_at_once(picked_run, tmp_path, capsys):
+    """An F1 typo: 1.1 mm at 1 mm/min is 66 s of motion; the user is told why the run takes long,
+    and the figures say it too."""
+    import json
+
+    run = tmp_path / "run"
+    from tests.pick_fixtures import copy_picked
+
+    copy_picked(picked_run, run)
+    f = tmp_path / "typo.gcode"
+    f.write_text("G21\nG1 X1.1 F1\n")
+    capsys.readouterr()
+    assert main(["job", str(run), str(f), "--no-chip"]) == 0
+    err = [ln for ln in capsys.readouterr().err.splitlines() if ln.startswith("nnik: warning:")]
+    assert len(err) == 1 and "1.1 mm in 66 s of motion" in err[0] and "mistyped F" in err[0], err
+    assert json.loads((run / "job" / "typo.json").read_text())["warnings"] == [err[0].removeprefix("nnik: warning: ")]
+    f.write_text("G21\nG1 X1.1 F600\n")  # the same path at a sane feed: nothing said
+    assert main(["job", str(run), str(f), "--no-chip"]) == 0
+    assert "warning" not in capsys.readouterr().err
