@@ -43,6 +43,8 @@ def write_metrics(outdir: Path, metrics: dict, merge: bool = True) -> None:
     from nnik.files.atomic_write import write_file_atomic
 
     path = Path(outdir) / METRICS_FILE
+    if path.is_dir():
+        raise NnikError("is a directory where nnik writes its metrics; move it away", str(path))
     old = read_metrics(path) if merge and path.is_file() else {}
     old.update(metrics)
     write_file_atomic(path, json.dumps(old, indent=2) + "\n")  # a kill leaves the old file or the new one

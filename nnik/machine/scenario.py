@@ -24,6 +24,7 @@ def _between(lo, hi):
     return lambda v: None if lo <= v <= hi else f"must be in [{lo}, {hi}], got {v}"
 
 
+MAX_SCENARIO_BYTES = 16 << 20  # a scenario is a page of TOML; its measured data is a CSV beside it
 MAX_POINTS = 2_000_000  # per split: float64 positions, targets and activations stay within RAM
 MAX_SEED = 2**32 - 1  # numpy, scipy and torch all take it
 MAX_WIDTH, MAX_DEPTH = 256, 4  # an 8-bit MCU runs nothing wider, and range analysis stays exact
@@ -254,12 +255,19 @@ class Scenario:
 def load_scenario(path: str | Path) -> Scenario:
     path = Path(path)
     source = str(path)
+    if path.is_dir():
+        raise NnikError("a directory, not a scenario file", source)
     if not path.is_file():
         raise NnikError("scenario file not found", source)
     try:
-        raw = tomllib.loads(path.read_text())
+        if path.stat().st_size > MAX_SCENARIO_BYTES:
+            raise NnikError(f"{path.stat().st_size} bytes: no scenario is that large (at most "
+                            f"{MAX_SCENARIO_BYTES >> 20} MiB)", source)
+        raw = tomllib.loads(path.read_text())  # universal newlines: LF, CRLF, CR alone and mixed
     except tomllib.TOMLDecodeError as exc:
         raise NnikError(f"malformed TOML: {exc}", source) from None
     except UnicodeDecodeError:
         raise NnikError("not a UTF-8 text file", source) from None
+    except OSError as exc:
+        raise NnikError(f"cannot read: {exc.strerror or exc}", source) from None
     return Scenario.from_dict(raw, source, path.parent.resolve())
