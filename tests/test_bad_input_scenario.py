@@ -119,3 +119,11 @@ def test_hbot_carriage_wider_than_its_frame(tmp_path, capsys, c_mm):
 ])
 def test_motion_the_firmware_cannot_run(tmp_path, capsys, motion, key):
     _generate_fails(tmp_path, capsys, GALVO + f"\n[motion]\n{motion}\n", f"[motion] {key}", "must be in")
+
+
+def test_input_unit_that_overflows_the_c_inputs(tmp_path, capsys):
+    """A 3 m workspace in 0.001 um units is 3e9: beyond the C API's int32_t inputs."""
+    text = COREXY.replace("[training]", "[export]\ninput_unit_um = 0.001\n\n[training]")
+    text = text.replace("x_mm = [0.0, 200.0]", "x_mm = [0.0, 3000.0]")
+    assert "x_mm = [0.0, 3000.0]" in text
+    _generate_fails(tmp_path, capsys, text, "[export] input_unit_um", "int32")

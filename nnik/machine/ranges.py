@@ -40,6 +40,18 @@ TOOL_Z_MM_MAX = 1000.0  # pen_z_um within +-1 m: int32 with room for Z_HOME and 
 TOOL_Z_UM_MAX = int(TOOL_Z_MM_MAX * 1000)
 
 
+INT32_MAX = (1 << 31) - 1  # the C API's inputs: int32_t in_um[2], in [export] input_unit_um units
+
+
+def input_units_problem(extent_mm: float, unit_um: float) -> str | None:
+    """The workspace's farthest coordinate in the C's input unit must fit int32_t."""
+    units = extent_mm * 1000.0 / unit_um
+    if units <= INT32_MAX:
+        return None
+    return (f"the workspace reaches {extent_mm:g} mm = {units:.4g} units of {unit_um:g} um, beyond the C's int32 "
+            f"inputs (at most {INT32_MAX}); use a coarser input unit (at least {extent_mm * 1000.0 / INT32_MAX:.3g} um)")
+
+
 def um(mm: float, per_mm: float = 1000.0) -> int:
     """Millimetres (or mm/min, mm/s^2) as the firmware's whole micrometres: rounded half to even."""
     return int(round(float(mm) * per_mm))

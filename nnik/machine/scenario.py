@@ -12,6 +12,7 @@ from nnik.machine.actuator import Actuator
 from nnik.emit.c_text import c_name_problem
 from nnik.errors import NnikError
 from nnik.machine.kinematics import KINDS, Mechanism, Workspace
+from nnik.machine import ranges
 from nnik.machine.motion import validate_motion
 from nnik.machine.params import MAX_LENGTH_MM, Param, positive, validate_table
 
@@ -225,6 +226,10 @@ class Scenario:
         _check_training_memory(mechanism, dataset, network, source)
         training = validate_table(top["training"], TRAINING, source, "training")
         export = validate_table(top["export"], EXPORT, source, "export")
+        problem = ranges.input_units_problem(float(max(abs(v) for v in (*workspace.x_mm, *workspace.y_mm))),
+                                             export["input_unit_um"])
+        if problem:
+            raise NnikError(problem, source, "[export] input_unit_um")
         target = validate_table(top["target"], TARGET, source, "target")
         tool = validate_table(top["tool"], TOOL, source, "tool")
         motion, dynamics = validate_motion(top["motion"], top["dynamics"], source)
