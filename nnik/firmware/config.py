@@ -99,10 +99,12 @@ class MachineConfig:
             raise ValueError("tick rate above 12 kHz overflows the 32-bit tick count")
         if self.tool not in TOOLS:
             raise ValueError(f"tool must be one of {', '.join(TOOLS)}")
-        if not 1 <= self.s_max <= 9999:
-            raise ValueError("s_max must be 1..9999")
-        if not (0 <= self.servo_up_deg <= 180 and 0 <= self.servo_down_deg <= 180):
+        if ranges.int_range(*ranges.S_MAX_RANGE)(self.s_max):
+            raise ValueError(f"s_max {ranges.int_range(*ranges.S_MAX_RANGE)(self.s_max)}")
+        if any(ranges.int_range(*ranges.SERVO_DEG_RANGE)(d) for d in (self.servo_up_deg, self.servo_down_deg)):
             raise ValueError("servo angles must be 0..180 degrees")
+        if ranges.int_range(*ranges.M300_DOWN_RANGE)(self.m300_down_max):
+            raise ValueError(f"m300_down_max {ranges.int_range(*ranges.M300_DOWN_RANGE)(self.m300_down_max)}")
         if self.rule not in RULES + ("",):
             raise ValueError(f"tool rule must be one of {', '.join(RULES)}")
         if self.tool == "laser" and self.rule == "z":
@@ -111,8 +113,8 @@ class MachineConfig:
             raise ValueError(f"build options must be among {', '.join(sorted(FEATURES))}")
         if not ranges.SCALE_Q16_MIN <= self.scale_q16 <= ranges.SCALE_Q16_MAX:
             raise ValueError("scale must be 1/65536..256")
-        if not abs(self.pen_z_um) <= ranges.TOOL_Z_UM_MAX:
-            raise ValueError(f"the tool's Z threshold {ranges.tool_z_problem(self.pen_z_um / 1000)}")
+        if ranges.tool_z_um_problem(self.pen_z_um):
+            raise ValueError(f"the tool's Z threshold {ranges.tool_z_um_problem(self.pen_z_um)}")
         self._check_motion()
 
     @property

@@ -142,6 +142,20 @@ def seg_um_problem(seg_um: int) -> str | None:
     return None if SEG_UM_MIN <= seg_um <= SEG_UM_MAX else f"must be in [{SEG_UM_MIN}, {SEG_UM_MAX}] um, got {seg_um}"
 
 
+S_MAX_RANGE = (1, 9999)  # S of full laser power (grbl's $30): duty = S * 255 / s_max in 32 bits
+SERVO_DEG_RANGE = (0, 180)
+M300_DOWN_RANGE = (0, 10000)  # M300 S (thousandths in the C: NNIK_GC_M300_DOWN = S * 1000, int32)
+
+
+def int_range(lo: int, hi: int, unit: str = ""):
+    """A check for an integer key: lo <= v <= hi."""
+    return lambda v: None if lo <= v <= hi else f"must be in [{lo}, {hi}]{unit}, got {v}"
+
+
+def tool_z_um_problem(z_um: int) -> str | None:
+    return None if abs(z_um) <= TOOL_Z_UM_MAX else f"must be within +-{TOOL_Z_UM_MAX} um (+-1 m), got {z_um}"
+
+
 def tool_z_problem(z_mm: float) -> str | None:
     if abs(z_mm) <= TOOL_Z_MM_MAX:
         return None

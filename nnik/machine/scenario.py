@@ -106,14 +106,14 @@ TOOL = {  # the G-code firmware's tool on D11 (nnik.firmware.config.MachineConfi
     "kind": Param("str", default="laser", choices=("laser", "pen", "servo", "spindle", "knife", "none"),
                   doc="laser: M3/M4/M5 with S, Z its focus; pen, spindle, knife: down at or below pen_z_um "
                       "(D11 high); servo: the same, as a servo angle; none: nothing on D11"),
-    "m300_down_max": Param("int", default=40, check=lambda v: None if 0 <= v <= 10000 else f"must be in [0, 10000], got {v}",
+    "m300_down_max": Param("int", default=40, check=ranges.int_range(*ranges.M300_DOWN_RANGE),
                            doc="a servo-pen file's M300 S at or below this puts the pen down (unicorn: 30 down, 50 up)"),
-    "s_max": Param("int", default=1000, check=lambda v: None if 1 <= v <= 9999 else f"must be in [1, 9999], got {v}",
+    "s_max": Param("int", default=1000, check=ranges.int_range(*ranges.S_MAX_RANGE),
                    doc="S of full laser power (grbl's $30)"),
-    "pen_z_um": Param("int", default=0, check=lambda v: None if abs(v) <= 1_000_000 else f"must be within +/-1 m, got {v}",
+    "pen_z_um": Param("int", default=0, check=ranges.tool_z_um_problem,
                       doc="Z above this (um) lifts the pen"),
-    "servo_up_deg": Param("int", default=90, check=lambda v: None if 0 <= v <= 180 else f"must be in [0, 180], got {v}"),
-    "servo_down_deg": Param("int", default=30, check=lambda v: None if 0 <= v <= 180 else f"must be in [0, 180], got {v}"),
+    "servo_up_deg": Param("int", default=90, check=ranges.int_range(*ranges.SERVO_DEG_RANGE)),
+    "servo_down_deg": Param("int", default=30, check=ranges.int_range(*ranges.SERVO_DEG_RANGE)),
 }
 
 

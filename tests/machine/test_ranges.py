@@ -133,3 +133,23 @@ def test_the_edges_compile_for_the_uno(tmp_path, sample_hz):
                                 "-I", str(d), "-I", str(ARDUINO / "src"), "-c", str(ARDUINO / "src" / src),
                                 "-o", str(d / (src + ".o"))], capture_output=True, text=True)
             assert r.returncode == 0, r.stderr
+
+
+TOOL_EDGES = {"s_max": ranges.S_MAX_RANGE, "servo_up_deg": ranges.SERVO_DEG_RANGE,
+              "servo_down_deg": ranges.SERVO_DEG_RANGE, "m300_down_max": ranges.M300_DOWN_RANGE,
+              "pen_z_um": (-ranges.TOOL_Z_UM_MAX, ranges.TOOL_Z_UM_MAX)}
+
+
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(key=st.sampled_from(sorted(TOOL_EDGES)), side=st.sampled_from((0, 1)), delta=st.integers(-2, 2),
+       kind=st.sampled_from(("laser", "servo", "pen")))
+def test_tool_values_the_scenario_accepts_build_and_others_are_one_line(tmp_path, key, side, delta, kind):
+    lo, hi = TOOL_EDGES[key]
+    v = (lo, hi)[side] + delta
+    p = tmp_path / "s.toml"
+    p.write_text(BASE + f'\n[tool]\nkind = "{kind}"\n{key} = {v}\n')
+    if lo <= v <= hi:
+        runs_on_the_firmware(load_scenario(p))
+    else:
+        with pytest.raises(NnikError, match=rf"\[tool\] {key}: must be"):
+            load_scenario(p)
