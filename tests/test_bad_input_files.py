@@ -116,3 +116,22 @@ def test_spoilt_files_in_a_model_directory_are_one_line(tiny_run, tmp_path, caps
 def test_shipped_scenarios_still_load():
     for p in sorted(DATASETS.glob("*.toml")):
         load_scenario(p)
+
+
+@pytest.mark.parametrize("ends", ["\r\n", "\r", "mixed"])
+def test_line_ends_in_a_measured_csv_give_the_same_marks(tmp_path, ends):
+    import numpy as np
+
+    text = (DATASETS / "corexy_measured.csv").read_bytes().decode().replace("\r\n", "\n")
+    lines = [ln for ln in text.split("\n") if ln]
+    toml = (DATASETS / "corexy_measured.toml").read_text()
+    out = {}
+    for name, end in (("lf", "\n"), ("other", ends)):
+        body = "".join(ln + ("\r\n", "\r", "\n")[k % 3] for k, ln in enumerate(lines)) if end == "mixed" \
+            else end.join(lines) + end
+        (tmp_path / f"{name}.csv").write_bytes(body.encode())
+        (tmp_path / f"{name}.toml").write_text(toml.replace("corexy_measured.csv", f"{name}.csv"))
+        m = load_scenario(tmp_path / f"{name}.toml").mechanism
+        out[name] = (np.asarray(m.positions_mm), np.asarray(m.commands))
+    assert len(out["lf"][0]) == len(lines) - 1
+    assert all(np.array_equal(a, b) for a, b in zip(out["lf"], out["other"]))
