@@ -107,6 +107,20 @@ def print_gcode_summary(g: dict) -> None:
     console.print(f"noted (no effect on this machine): {text or 'nothing'}")
 
 
+def behind_message(chip: dict, res: dict) -> str:
+    """The simulated chip had not finished when its simulated-time bound ran out."""
+    from nnik.firmware.gcode.job import CLOCK_HZ
+
+    period = CLOCK_HZ / res["motion"]["sample_hz"]
+    per = chip.get("cycles_per_sample") or {}
+    lines = res["gcode"]["lines_sent"]
+    load = (f"; its sample loop took {per['mean']:.0f} cycles a sample on average, the sample period is "
+            f"{period:.0f}") if per.get("mean") else ""
+    return (f"the simulated chip had not finished after {chip['end_cycle'] / CLOCK_HZ:.0f} s of simulated time "
+            f"(the plan takes {res['seconds']:.0f} s; {len(chip['replies'])} of {lines} lines answered): it falls "
+            f"behind the plan{load}; lower the feed or [motion] sample_hz, or run the job with fewer, longer lines")
+
+
 def cmd_job(args) -> None:
     from nnik.firmware.gcode.job import run_job
     from nnik.firmware.gcode.job_input import JobOptions
@@ -144,6 +158,8 @@ def cmd_job(args) -> None:
         if chip.get("end_s") is not None:
             console.print(f"simulated chip: {chip['segments_started']} segments, idle at {chip['end_s']:.3f} s "
                           f"({chip['motion_s']:.3f} s of motion; the model's {res['seconds']:.3f} s)")
+        if chip.get("state") == "timeout":  # the chip fell behind the plan: say so, not "steps differ"
+            raise NnikError(behind_message(chip, res), res["job"])
         if not (chip["steps_equal"] and chip["replies_equal"] and chip["selftest_pass"]):
             raise NnikError("the simulated chip's steps or answers differ from the Python model", res["job"])
     console.print(f"plot: {res['png']}; figures: {Path(res['png']).with_suffix('.json')}")

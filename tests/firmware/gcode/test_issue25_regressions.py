@@ -92,3 +92,18 @@ def test_a_job_slow_for_its_length_is_said_at_once(picked_run, tmp_path, capsys)
     f.write_text("G21\nG1 X1.1 F600\n")  # the same path at a sane feed: nothing said
     assert main(["job", str(run), str(f), "--no-chip"]) == 0
     assert "warning" not in capsys.readouterr().err
+
+
+def test_a_chip_that_falls_behind_is_said_so():
+    """A 100,000-line raster at 6,000 mm/min on the corexy: the Uno's sample loop took 39,589 cycles a
+    500 Hz sample (32,000 in the period), so the co-simulation reached its bound (1.5 x the plan + 2 s)
+    first; that used to be "the steps differ from the Python model"."""
+    from nnik.commands.job import behind_message
+
+    chip = {"state": "timeout", "end_cycle": 10_257_408_001, "replies": ["ok"] * 96_462,
+            "cycles_per_sample": {"mean": 39_589.4, "max": 111_007}}
+    res = {"seconds": 426.06, "motion": {"sample_hz": 500}, "gcode": {"lines_sent": 100_000}}
+    line = behind_message(chip, res)
+    assert line.startswith("the simulated chip had not finished after 641 s of simulated time (the plan takes 426 s; "
+                           "96462 of 100000 lines answered)")
+    assert "39589 cycles a sample on average, the sample period is 32000" in line and "\n" not in line
