@@ -11,6 +11,7 @@ from pathlib import Path
 from rich.table import Table
 
 from nnik import pipeline
+from nnik.commands import option_types as opt
 from nnik.errors import NnikError, NnikWarning, warning_line
 from nnik.files.atomic_write import reraise_lost_interrupts
 from nnik.files.os_errors import os_error_line
@@ -203,7 +204,7 @@ def _evaluated_dir(model_dir) -> Path:
 
 def cmd_export(args) -> None:
     out = _evaluated_dir(args.model_dir)
-    if getattr(args, "arduino", None):
+    if args.arduino is not None:
         from nnik.files.pick_state import require_deliverable
         from nnik.firmware.arduino import check_libdir
 
@@ -213,7 +214,7 @@ def cmd_export(args) -> None:
         check_libdir(Path(args.arduino), out)  # DIR too, before c/ is touched
     im, _ = pipeline.export(out)
     console.print(f"wrote {out / pipeline.C_DIR}/{im.name}.h and {im.name}.c ({im.weights_bytes()} bytes of tables)")
-    if getattr(args, "arduino", None):
+    if args.arduino is not None:
         from nnik.firmware.arduino import export_arduino
 
         lib = export_arduino(out, Path(args.arduino))
@@ -226,8 +227,6 @@ def cmd_select(args) -> None:
     out = _evaluated_dir(args.model_dir)
     target = {k: v for k, v in (("chip", args.chip), ("max_error", args.max_error), ("max_cycles", args.max_cycles),
                                 ("max_flash_bytes", args.max_flash_bytes)) if v is not None}
-    if "max_error" in target and not target["max_error"] > 0:
-        raise NnikError(f"--max-error must be > 0, got {target['max_error']}")
     try:
         pipeline.select(out, families=args.family or None, target=target, progress=sys.stderr.isatty())
     finally:
@@ -326,7 +325,7 @@ def cmd_report(args) -> None:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    ap = argparse.ArgumentParser(prog="nnik", description="Inverse kinematics as verified fixed-point C for 8-bit MCUs.")
+    ap = opt.OneLineParser(prog="nnik", description="Inverse kinematics as verified fixed-point C for 8-bit MCUs.")
     sub = ap.add_subparsers(dest="command", required=True)
 
     def scenario_cmd(name, func, help_):
@@ -338,7 +337,7 @@ def build_parser() -> argparse.ArgumentParser:
         return p
 
     p = scenario_cmd("run", cmd_run, "generate, train, export and evaluate a scenario")
-    p.add_argument("--search", type=int, metavar="N", help="pick by an N-trial design-space search, not the ladder")
+    p.add_argument("--search", type=opt.TRIALS, metavar="N", help="pick by an N-trial design-space search, not the ladder")
     scenario_cmd("generate", cmd_generate, "sample the workspace and label it with the exact IK")
     scenario_cmd("train", cmd_train, "train the MLP on OUTDIR/data.npz, write model.pt and model.onnx")
     p = sub.add_parser("evaluate", help="accuracy of a trained model against the truth")
@@ -352,9 +351,9 @@ def build_parser() -> argparse.ArgumentParser:
                                       "export the cheapest that meets the target as c/NAME.c")
     p.add_argument("model_dir")
     p.add_argument("--chip", choices=("avr", "pic18"), help="default: the scenario's [target] chip")
-    p.add_argument("--max-error", type=float, help="default: the scenario's [target] max_error")
-    p.add_argument("--max-cycles", type=float)
-    p.add_argument("--max-flash-bytes", type=int)
+    p.add_argument("--max-error", type=opt.MAX_ERROR, help="default: the scenario's [target] max_error")
+    p.add_argument("--max-cycles", type=opt.MAX_CYCLES)
+    p.add_argument("--max-flash-bytes", type=opt.MAX_FLASH_BYTES)
     p.add_argument("--family", action="append", choices=("mlp", "poly", "lut", "hybrid"),
                    help="only these families (repeatable; default all)")
     p.set_defaults(func=cmd_select)
@@ -373,7 +372,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("model_dir")
     p.add_argument("--target", required=True, choices=("avr", "pic18"))
     p.add_argument("--compiler", help="profile, e.g. avr-gcc-Os, avr-gcc-O2, pic18-sdcc (default: the target's first)")
-    p.add_argument("--clock-hz", type=int, default=16_000_000)
+    p.add_argument("--clock-hz", type=opt.CLOCK_HZ, default=16_000_000)
     p.add_argument("--kernel", choices=("fast", "portable"), help="default: the scenario's [export] kernel")
     p.set_defaults(func=cmd_estimate)
     p = sub.add_parser("report", help="write the HTML/Markdown accuracy and latency report")
@@ -383,11 +382,11 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("search", help="multi-objective search over every family's knobs; verify the front, pick")
     p.add_argument("target", metavar="OUTDIR_OR_SCENARIO", help="a trained output directory or a scenario TOML")
     p.add_argument("-o", "--outdir", help="output directory for a scenario TOML (default build/<name>/)")
-    p.add_argument("--trials", type=int, default=200, help="finished trials the study should hold (default 200)")
+    p.add_argument("--trials", type=opt.TRIALS, default=200, help="finished trials the study should hold (default 200)")
     p.add_argument("--storage", help="database URL, e.g. postgresql://USER@HOST:PORT/DB, or journal:///FILE (a journal "
                    "file other directories share; default OUTDIR/search.journal)")
     p.add_argument("--study", help="study name (default nnik-<scenario>)")
-    p.add_argument("--jobs", type=int, default=1, help="local worker processes (default 1)")
+    p.add_argument("--jobs", type=opt.JOBS, default=1, help="local worker processes (default 1)")
     p.add_argument("--families", help="comma-separated families to search (default all)")
     p.add_argument("--worker", action="store_true", help="only run trials (another machine verifies and picks)")
     p.add_argument("--no-warm-start", action="store_true", help="do not queue the families' ladders as a new study's first trials")
@@ -398,15 +397,15 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("synth-csv", help="write a calibration CSV measured on a simulated machine")
     p.add_argument("scenario", help="scenario of the machine to 'measure' (an analytic one)")
     p.add_argument("-o", "--output", required=True, help="CSV to write (x_um,y_um,q1,q2)")
-    p.add_argument("-n", type=int, default=400, help="number of measured points")
-    p.add_argument("--noise-um", type=float, default=2.0, help="measurement noise, 1 sigma, per axis")
+    p.add_argument("-n", type=opt.SYNTH_N, default=400, help="number of measured points")
+    p.add_argument("--noise-um", type=opt.NOISE_UM, default=2.0, help="measurement noise, 1 sigma, per axis")
     p.add_argument("--readings", choices=("commanded", "rounded"), default="commanded",
                    help="commanded: whole-step commands, the position measured (default); rounded: the head on each "
                    "mark, q1/q2 the step counter's whole-step reading (+-0.5 of rounding)")
     p.add_argument("--sampling", choices=("sobol", "grid"), default="sobol",
                    help="scattered (sobol) marks or a k x k grid (k = ceil(sqrt(n)))")
-    p.add_argument("--inset-mm", type=float, default=0.05, help="marks this far inside [workspace] (default 0.05)")
-    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--inset-mm", type=opt.INSET_MM, default=0.05, help="marks this far inside [workspace] (default 0.05)")
+    p.add_argument("--seed", type=opt.SEED, default=0)
     from nnik.commands import job as job_command, shaper_calibrate
     from nnik.commands.synth_csv import cmd_synth_csv
 
@@ -414,11 +413,15 @@ def build_parser() -> argparse.ArgumentParser:
 
     job_command.register(sub)
     shaper_calibrate.register(sub)
+    opt.check_paths(ap)
     return ap
 
 
 def main(argv: list[str] | None = None) -> int:
-    args = build_parser().parse_args(argv)
+    try:
+        args = build_parser().parse_args(argv)
+    except SystemExit as exc:  # --help (0), or a bad option: the one line was printed (2)
+        return exc.code if isinstance(exc.code, int) else 2
     reraise_lost_interrupts()
     # numpy's RuntimeWarnings are held back: after an error the one error line is all that shows;
     # after success they follow the output, one line each, so nothing is lost.

@@ -6,7 +6,7 @@ from __future__ import annotations
 import pytest
 
 from tests.bad_input import COREXY, GALVO, fails
-from tests.conftest import write_toml
+from tests.conftest import DATASETS, write_toml
 
 
 def _generate_fails(tmp_path, capsys, text, *needles):
@@ -98,3 +98,32 @@ def test_numbers_are_range_checked_before_any_work(tmp_path, capsys, old, new, n
     """Issue 15: what passes validation must compile and run; a huge number is one line, not a
     compiler error."""
     _generate_fails(tmp_path, capsys, GALVO.replace(old, new), needle)
+
+
+HBOT = (DATASETS / "hbot_unicamp.toml").read_text()
+
+
+@pytest.mark.parametrize("c_mm", ["400.0", "500.0"])
+def test_hbot_carriage_wider_than_its_frame(tmp_path, capsys, c_mm):
+    """Issue 25: an HBOT carriage as wide as its frame span, or wider, was accepted."""
+    _generate_fails(tmp_path, capsys, HBOT.replace("C_mm = 60.0", f"C_mm = {c_mm}"), "[mechanism] C_mm",
+                    "narrower than the frame span X_mm")
+
+
+@pytest.mark.parametrize("motion, key", [
+    ("junction_deviation_mm = 0", "junction_deviation_mm"),  # passed a whole run, then crashed export --arduino
+    ("junction_deviation_mm = 2.0", "junction_deviation_mm"),
+    ("max_feed_mm_min = 100000", "max_feed_mm_min"),  # above the firmware's 2^24 Q16 um/sample at 1 kHz
+    ("accel_x_mm_s2 = 0.1", "accel_x_mm_s2"),  # below 16 Q16 um/sample^2 at 1 kHz
+    ("sample_hz = 100", "accel_x_mm_s2"),  # the default 1000 mm/s^2 is beyond 2^22 Q16 um/sample^2 at 100 Hz
+])
+def test_motion_the_firmware_cannot_run(tmp_path, capsys, motion, key):
+    _generate_fails(tmp_path, capsys, GALVO + f"\n[motion]\n{motion}\n", f"[motion] {key}", "must be in")
+
+
+def test_input_unit_that_overflows_the_c_inputs(tmp_path, capsys):
+    """A 3 m workspace in 0.001 um units is 3e9: beyond the C API's int32_t inputs."""
+    text = COREXY.replace("[training]", "[export]\ninput_unit_um = 0.001\n\n[training]")
+    text = text.replace("x_mm = [0.0, 200.0]", "x_mm = [0.0, 3000.0]")
+    assert "x_mm = [0.0, 3000.0]" in text
+    _generate_fails(tmp_path, capsys, text, "[export] input_unit_um", "int32")

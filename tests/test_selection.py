@@ -108,7 +108,7 @@ def test_select_command_rejects_a_bad_max_error(galvo_run, capsys):
 
     rc = main(["select", str(galvo_run), "--max-error", "0"])
     err = capsys.readouterr().err.strip().splitlines()
-    assert rc == 2 and len(err) == 1 and "--max-error must be > 0" in err[0]
+    assert rc == 2 and len(err) == 1 and "--max-error: must be > 0" in err[0]
 
 
 def test_select_command_names_the_best_error_when_nothing_meets(galvo_run, capsys):

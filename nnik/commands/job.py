@@ -2,35 +2,17 @@
 
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 
 from rich.console import Console
 from rich.table import Table
 
+from nnik.commands import option_types as opt
 from nnik.errors import NnikError
 from nnik.files.outdir import JOB_DIR, check_model_dir
 
 console = Console()
-
-
-def _offset(text: str) -> tuple[float, float]:
-    try:
-        x, y = (float(v) for v in text.split(","))
-    except ValueError:
-        raise NnikError(f"--offset needs X,Y (two numbers), not {text!r}", None, "--offset") from None
-    if not all(abs(v) < 1e6 for v in (x, y)):
-        raise NnikError("--offset must be finite and under 10^6", None, "--offset")
-    return x, y
-
-
-def _scale(text: str) -> float:
-    try:
-        s = float(text)
-    except ValueError:
-        raise NnikError(f"--scale needs a number, not {text!r}", None, "--scale") from None
-    if not 1 / 65536 <= s <= 256:
-        raise NnikError("--scale must be 1/65536..256", None, "--scale")
-    return s
 
 
 def register(sub) -> None:
@@ -48,8 +30,8 @@ def register(sub) -> None:
                    "tool-on length and every noted word; writes nothing")
     p.add_argument("--fit", action="store_true", help="scale the job down uniformly (never up) to fit the workspace and "
                    "centre it")
-    p.add_argument("--scale", type=_scale, help="scale the job by S about the work origin")
-    p.add_argument("--offset", type=_offset, metavar="X,Y", help="move the job by X,Y in its units (mm, or inches for a "
+    p.add_argument("--scale", type=opt.SCALE, help="scale the job by S about the work origin")
+    p.add_argument("--offset", type=opt.pair, metavar="X,Y", help="move the job by X,Y in its units (mm, or inches for a "
                    "G20 job)")
     p.add_argument("--flavour", help="grbl, marlin or linuxcnc (default: detected from the file)")
     p.add_argument("--tool", help="the machine's tool: laser, pen, servo, spindle, knife or none (default: the "
@@ -57,9 +39,9 @@ def register(sub) -> None:
     p.add_argument("--tool-rule", choices=("s", "z", "e", "m300", "none"),
                    help="how the job turns the tool on: s (M3/M4 S), z (Z at or below the threshold), e (Marlin: a "
                         "move that extrudes), m300 (M300 S servo pen), none (default: from the tool and the file)")
-    p.add_argument("--tool-z", type=float, metavar="MM", help="a pen, spindle or knife is down at or below this Z "
+    p.add_argument("--tool-z", type=opt.TOOL_Z, metavar="MM", help="a pen, spindle or knife is down at or below this Z "
                    "(default: the scenario's [tool] pen_z_um, 0)")
-    p.add_argument("--seg-um", type=int, help="longest arc chord in um (default 500)")
+    p.add_argument("--seg-um", type=opt.SEG_UM, help="longest arc chord in um (default 500)")
     p.add_argument("--shaper", metavar="KIND",
                    help="input shaper on the chip: none, zv, mzv, zvd, ei, 2hump_ei, 3hump_ei, or auto (the one that "
                         "meets [motion] max_contour_um at the least job time); default: the scenario's [shaper] table "
@@ -73,9 +55,17 @@ def register(sub) -> None:
     p.set_defaults(func=cmd_job)
 
 
-def _model_dir(args) -> Path:
-    from nnik import pipeline
+def _model_dir(args):
+    """(the model directory, the scenario whose [motion], [dynamics] and [tool] the job runs with).
 
+    With a scenario TOML its model directory must hold a model of that very machine (the same
+    fingerprint: name, mechanism, actuator, workspace, data and network); the TOML's own [motion],
+    [dynamics] and [tool], which the trained IK does not depend on, are the truth, edits included.
+    With a model directory: the scenario it was trained with (its model.pt's copy)."""
+    from nnik import pipeline
+    from nnik.firmware.ik_oracle import load_scenario_of
+
+    scn = None
     if Path(args.scenario).is_dir():
         out = Path(args.scenario)
         if args.outdir and Path(args.outdir).resolve() != out.resolve():
@@ -88,9 +78,26 @@ def _model_dir(args) -> Path:
         out = Path(args.outdir) if args.outdir else pipeline.default_outdir(scn)
     if not (out / pipeline.MODEL_FILE).is_file():
         raise NnikError(f"no trained model (run `nnik run {args.scenario}` first)", str(out))
+    trained = load_scenario_of(out)
+    if scn is None:
+        _lock_job_dir(args, out)
+        return out, trained
+    if trained.fingerprint != scn.fingerprint:
+        same = "a changed machine of the same name" if trained.name == scn.name else f"machine {scn.name!r}"
+        raise NnikError(f"{args.scenario} describes {same}, but {out} holds a model of machine {trained.name!r} "
+                        f"(trained from {trained.source}); give the model's own scenario, or `nnik run` this one first",
+                        args.scenario)
+    changed = [t for t in ("motion", "dynamics", "shaper", "tool") if scn.raw.get(t) != trained.raw.get(t)]
+    if changed:
+        console.print(f"{', '.join(f'[{t}]' for t in changed)} from {args.scenario}, changed since training (the "
+                      "trained IK does not depend on them)", markup=False)
+    _lock_job_dir(args, out)
+    return out, scn
+
+
+def _lock_job_dir(args, out: Path) -> None:
     if not args.check:  # it writes OUTDIR/job/: a directory, writable, one job at a time (the lock)
         check_job_outputs(check_model_dir(out, JOB_DIR), Path(args.job))
-    return out
 
 
 JOB_OUTPUTS = ("{}.json", "{}.png", "{}_precompensated.gcode", "{}_dynamics.png", "{}_chip_steps.csv")
@@ -123,19 +130,34 @@ def print_gcode_summary(g: dict) -> None:
     console.print(f"noted (no effect on this machine): {text or 'nothing'}")
 
 
+def behind_message(chip: dict, res: dict) -> str:
+    """The simulated chip had not finished when its simulated-time bound ran out."""
+    from nnik.firmware.gcode.job import CLOCK_HZ
+
+    period = CLOCK_HZ / res["motion"]["sample_hz"]
+    per = chip.get("cycles_per_sample") or {}
+    lines = res["gcode"]["lines_sent"]
+    load = (f"; its sample loop took {per['mean']:.0f} cycles a sample on average, the sample period is "
+            f"{period:.0f}") if per.get("mean") else ""
+    return (f"the simulated chip had not finished after {chip['end_cycle'] / CLOCK_HZ:.0f} s of simulated time "
+            f"(the plan takes {res['seconds']:.0f} s; {len(chip['replies'])} of {lines} lines answered): it falls "
+            f"behind the plan{load}; lower the feed or [motion] sample_hz, or run the job with fewer, longer lines")
+
+
 def cmd_job(args) -> None:
     from nnik.firmware.gcode.job import run_job
     from nnik.firmware.gcode.job_input import JobOptions
     from nnik.report.job_summary import JOB_HEADER, job_row
 
-    out = _model_dir(args)
+    out, scn = _model_dir(args)
     from nnik.files.pick_state import require_deliverable
 
     require_deliverable(out, "job")  # the job runs the firmware: only the verified pick, never the MLP instead
     opts = JobOptions(flavour=args.flavour, tool=args.tool, tool_rule=args.tool_rule, tool_z_mm=args.tool_z, fit=args.fit,
                       scale=args.scale, offset=args.offset)
     res = run_job(out, Path(args.job), seg_um=args.seg_um, use_chip=False if args.no_chip else None,
-                  shaper=args.shaper, precompensate=args.precompensate, opts=opts, check=args.check, mcu=args.mcu)
+                  shaper=args.shaper, precompensate=args.precompensate, opts=opts, check=args.check, mcu=args.mcu,
+                  scenario=scn, warn=lambda w: print(f"nnik: warning: {w}", file=sys.stderr, flush=True))
     if args.check:
         print_gcode_summary(res)
         c = res["check"]
@@ -159,6 +181,8 @@ def cmd_job(args) -> None:
         if chip.get("end_s") is not None:
             console.print(f"simulated chip: {chip['segments_started']} segments, idle at {chip['end_s']:.3f} s "
                           f"({chip['motion_s']:.3f} s of motion; the model's {res['seconds']:.3f} s)")
+        if chip.get("state") == "timeout":  # the chip fell behind the plan: say so, not "steps differ"
+            raise NnikError(behind_message(chip, res), res["job"])
         if not (chip["steps_equal"] and chip["replies_equal"] and chip["selftest_pass"]):
             raise NnikError("the simulated chip's steps or answers differ from the Python model", res["job"])
     console.print(f"plot: {res['png']}; figures: {Path(res['png']).with_suffix('.json')}")

@@ -136,3 +136,13 @@ def quantized_residual(shaper: Shaper, sample_hz: int, f_hz: float | None = None
     amps, delays = quantize(shaper, sample_hz)
     return residual(amps, [d / sample_hz for d in delays], shaper.f_hz if f_hz is None else f_hz,
                     shaper.zeta if zeta is None else zeta)
+
+
+def axis_taps(kind: str, dynamics: dict, sample_hz: int) -> tuple:
+    """Per axis (Q15 amplitudes, delays in samples) of the shaper kind for the [dynamics]
+    resonance {"f_hz": (fx, fy), "zeta": (zx, zy)}: designed, then quantised."""
+    out = []
+    for f, z in zip(dynamics["f_hz"], dynamics["zeta"]):
+        amps, delays = quantize(design(kind, float(f), float(z)), sample_hz)
+        out.append((tuple(int(a) for a in amps), tuple(int(d) for d in delays)))
+    return tuple(out)

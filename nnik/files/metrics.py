@@ -32,6 +32,9 @@ def read_metrics(path: Path) -> dict:
     if not isinstance(m, dict):
         raise NnikError(f"corrupt metrics file (a JSON {type(m).__name__}, not an object); run `nnik evaluate` again",
                         str(path))
+    from nnik.files import json_shape
+
+    json_shape.check(m, json_shape.METRICS, str(path), "run `nnik evaluate` again")
     return m
 
 
@@ -40,6 +43,8 @@ def write_metrics(outdir: Path, metrics: dict, merge: bool = True) -> None:
     from nnik.files.atomic_write import write_file_atomic
 
     path = Path(outdir) / METRICS_FILE
+    if path.is_dir():
+        raise NnikError("is a directory where nnik writes its metrics; move it away", str(path))
     old = read_metrics(path) if merge and path.is_file() else {}
     old.update(metrics)
     write_file_atomic(path, json.dumps(old, indent=2) + "\n")  # a kill leaves the old file or the new one

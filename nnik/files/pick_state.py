@@ -106,16 +106,21 @@ def seal(outdir: Path, section: dict) -> dict:
 
 
 def _read_marker(outdir: Path) -> dict | None | str:
+    """The marker, None without one, or what is wrong with it (one phrase naming the key)."""
+    from nnik.files import json_shape
+
     p = marker_path(outdir)
     if not p.is_file():
         return None
     try:
         m = json.loads(p.read_text(encoding="utf-8"))
     except (OSError, UnicodeDecodeError, json.JSONDecodeError):
-        return "corrupt"
-    need = ("version", "name", "c_hash", "family", "config", "model_hash", "pre_max", "target", "checks", "inputs")
-    if not isinstance(m, dict) or m.get("version") != VERSION or any(k not in m for k in need):
-        return "corrupt"
+        return "is unreadable (an interrupted write?)"
+    problem = json_shape.problem(m, json_shape.PICK)
+    if problem:
+        return f"is not one nnik wrote: {problem}"
+    if m["version"] != VERSION:
+        return f"is of another version ({m['version']}, this nnik writes {VERSION})"
     return m
 
 
@@ -141,8 +146,8 @@ def status(outdir: Path, name: str | None = None) -> PickStatus:
             why = "the last `nnik run`, `nnik select` or `nnik search` did not finish"
         there = f"; c/{nm}.c is not a finished pick" if (outdir / "c" / f"{nm}.c").is_file() else ""
         return PickStatus(False, "none", f"no finished pick here ({why}{there}); {select}", nm)
-    if m == "corrupt":
-        return PickStatus(False, "corrupt", f"{PICK_FILE} is unreadable (an interrupted write?); {select}", name or "")
+    if isinstance(m, str):
+        return PickStatus(False, "corrupt", f"{PICK_FILE} {m}; {select}", name or "")
     st = PickStatus(False, "", "", m["name"], dir_hash(outdir / "c", m["name"]), m["c_hash"], m)
     if m["inputs"] != inputs_hash(outdir):
         changed = [f for f in INPUT_FILES if m["inputs"].get(f) != inputs_hash(outdir)[f]]

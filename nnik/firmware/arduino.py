@@ -16,6 +16,7 @@ import jinja2
 import numpy as np
 
 from nnik import pipeline
+from nnik.errors import NnikError
 from nnik.machine.domain import domain_um
 from nnik.emit.templating import CODEGEN, RUNTIME, environment
 from nnik.firmware.config import MachineConfig, default_machine
@@ -50,46 +51,36 @@ def golden_vectors(scn, n: int = N_GOLDEN, seed: int = 0) -> np.ndarray:
     return np.concatenate([np.asarray(fixed, dtype=np.int64), rand])
 
 
-def is_library(libdir: Path) -> bool:
-    """A folder an earlier `nnik export --arduino` wrote (its library.properties names nnik_*)."""
-    try:
-        return (Path(libdir) / "library.properties").read_text(errors="replace").startswith("name=nnik_")
-    except OSError:
-        return False
+MARKER = ".nnik-arduino-library"  # in every folder this export wrote: the folder it may replace
 
 
 def check_libdir(libdir: Path, outdir: Path) -> Path:
-    """DIR of --arduino, checked before anything is written: new, empty or an earlier library."""
-    from nnik.files.output_path import check_replaceable_dir
+    """DIR of --arduino, checked before anything is written: new, empty or an earlier export's
+    folder (its marker), and never the model directory or a folder holding it."""
+    from nnik.files.replace_dir import check_replaceable
 
-    return check_replaceable_dir(libdir, is_library, inputs=[outdir], what="the Arduino library")
+    final, model = Path(libdir).resolve(), Path(outdir).resolve()
+    if final == model or final in model.parents:
+        raise NnikError("the Arduino library would replace the model directory that it is exported from",
+                        str(libdir), "--arduino")
+    check_replaceable(Path(libdir), MARKER, "Arduino library")
+    return Path(libdir)
 
 
 def export_arduino(outdir: Path, libdir: Path, machine: MachineConfig | None = None) -> dict:
-    """Write the library; returns {"libname", "dir", "name", "machine", "golden"}. It is built
-    beside DIR and then put in its place whole (an earlier library there is replaced, none of its
-    files left behind; a failure leaves DIR as it was)."""
-    from nnik.files.atomic_write import held_interrupt
-    from nnik.files.output_path import replace_dir, staging_dir
+    """Write the library as a whole (nnik.files.replace_dir: an earlier export's folder is replaced
+    with nothing of it left, a folder nnik did not write is refused); returns {"libname", "dir",
+    "name", "machine", "golden"}."""
+    from nnik.files.replace_dir import staged_folder
 
     outdir, final = Path(outdir), check_libdir(libdir, outdir)
-    libdir = staging_dir(final)
-    try:
-        res = _write_library(outdir, libdir, final, machine)
-        with held_interrupt():
-            replace_dir(libdir, final)
-    except BaseException:
-        with held_interrupt():
-            shutil.rmtree(libdir, ignore_errors=True)
-        raise
-    return res
-
-
-def _write_library(outdir: Path, libdir: Path, final: Path, machine: MachineConfig | None) -> dict:
     scn = load_scenario_of(outdir)
     name = scn.name
     c_dir = ik_sources(outdir, name)
-    machine = machine or default_machine(scn)
+    try:
+        machine = machine or default_machine(scn)
+    except ValueError as exc:  # [motion] shaper "auto" picks per job: a library needs a fixed one
+        raise NnikError(f"{exc}; the library needs a fixed shaper", scn.source, "[motion] shaper") from None
     ik = ik_oracle(outdir)
     vec = golden_vectors(scn)
     out, flags = ik(vec)
@@ -100,13 +91,22 @@ def _write_library(outdir: Path, libdir: Path, final: Path, machine: MachineConf
     else:
         what = "MLP " + "-".join(map(str, _shape(outdir)))
         hash_ = pipeline.load_metrics(outdir).get("fixed", {}).get("model_hash", "-")
+    libname = f"nnik_{name}"
+    with staged_folder(final, MARKER, "Arduino library", f"{libname} {VERSION}: written by nnik export --arduino\n") \
+            as libdir:
+        _write_library(libdir, final, scn, c_dir, machine, ik, rows, what, hash_, libname)
+    return {"libname": libname, "dir": str(final), "name": name, "machine": machine, "golden": len(rows)}
+
+
+def _write_library(libdir: Path, final: Path, scn, c_dir: Path, machine: MachineConfig, ik, rows, what: str,
+                   hash_: str, libname: str) -> None:
+    name = scn.name
     src = libdir / "src"
     src.mkdir(parents=True, exist_ok=True)
     for f in [c_dir / f"{name}.c", c_dir / f"{name}.h", *sorted(RUNTIME.glob("*.h"))]:
         shutil.copy(f, src / f.name)
     for f in ENGINE_FILES:
         shutil.copy(ARDUINO / "src" / f, src / f)
-    libname = f"nnik_{name}"
     ctx = dict(name=name, scenario=c_comment_safe(scn.source), libname=libname, version=VERSION,
                shape=c_comment_safe(what).replace('"', "'"),
                description=c_comment_safe(scn.raw.get("description") or name), unit=scn.unit, outputs=scn.outputs, model_hash=hash_,
@@ -129,7 +129,6 @@ def _write_library(outdir: Path, libdir: Path, final: Path, machine: MachineConf
     for path, tmpl in files.items():
         path.parent.mkdir(parents=True, exist_ok=True)
         path.write_text(env.get_template(tmpl).render(**ctx, example=path.parent.name, libdir_name=final.resolve().name))
-    return {"libname": libname, "dir": str(final), "name": name, "machine": machine, "golden": len(rows)}
 
 
 def homepage() -> str:

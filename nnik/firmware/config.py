@@ -18,21 +18,18 @@ TOOLS = ("laser", "pen", "servo", "spindle", "knife", "none")
 # "z" (down at or below pen_z_um), "e" (Marlin: a move that extrudes), "m300" (a servo pen:
 # M300 S at or below m300_down_max is down), "none" (never on)
 RULES = ("s", "z", "e", "m300", "none")
-SCALE_ONE = 1 << 16
 FEATURES = frozenset({"g5", "g93", "planes", "wcs"})
 # the Uno's default build: grbl's own coordinate systems and planes; G93 (1.1 kB) and G5 (2.2 kB) are
 # left out (each line that needs one: error 20), as grbl's config.h leaves out what does not fit;
 # a job's build carries exactly what its file uses, and the ATmega2560 build carries everything
 UNO_FEATURES = frozenset({"wcs", "planes"})
 SHAPER_KINDS = ("none",) + KINDS
-# taps per axis: 3hump_ei's five impulses, each split between the two samples around it
-MAX_SHAPER_TAPS = 10
-SHAPER_RAM_BUDGET = 512  # bytes of SRAM the shaper's buffers may take on the ATmega328
-MIN_FEED_UM_MIN = 1000
 SERVO_MIN_US, SERVO_MAX_US = 544, 2400  # 0 and 180 degrees, as Arduino's Servo library
 SERVO_US_PER_COUNT = 64  # Timer2 at 16 MHz / 1024: 61 Hz, 64 us per count
 
+from nnik.machine import ranges
 from nnik.machine.domain import domain_um
+from nnik.machine.ranges import Q16 as SCALE_ONE
 
 
 @dataclass(frozen=True)
@@ -79,11 +76,11 @@ class MachineConfig:
 
     @property
     def acc_q16(self) -> tuple[int, int]:
-        return tuple(int(a) * 65536 // (self.sample_hz * self.sample_hz) for a in self.accel_um_s2)
+        return tuple(ranges.acc_q16(a, self.sample_hz) for a in self.accel_um_s2)
 
     @property
     def vn_max_q16(self) -> int:
-        return self.max_feed_um_min * 65536 // (60 * self.sample_hz)
+        return ranges.vn_q16(self.max_feed_um_min, self.sample_hz)
 
     @property
     def sample_ticks(self) -> int:
@@ -92,33 +89,36 @@ class MachineConfig:
     @property
     def shaper_len(self) -> int:
         """The shaper's memory in samples per axis (its longest delay); 0 without a shaper."""
-        return max((max(d) for _, d in self.shaper_taps), default=0)
+        return ranges.shaper_len(self.shaper_taps)
 
     @property
     def shaper_ram_bytes(self) -> int:
         """SRAM of the shaper's buffers: int16 increments and int16 window sums per axis."""
-        n = max((len(a) for a, _ in self.shaper_taps), default=0)
-        return 2 * 2 * self.shaper_len + 2 * 2 * n + 1 if self.shaper_len else 0
+        return ranges.shaper_ram_bytes(self.shaper_taps)
 
     def __post_init__(self):
-        if not 100 <= self.seg_um <= 5000:
-            raise ValueError("segment length must be 100..5000 um")
+        if ranges.seg_um_problem(self.seg_um):
+            raise ValueError(f"segment length {ranges.seg_um_problem(self.seg_um)}")
         if self.tick_hz > 12_000:
             raise ValueError("tick rate above 12 kHz overflows the 32-bit tick count")
         if self.tool not in TOOLS:
             raise ValueError(f"tool must be one of {', '.join(TOOLS)}")
-        if not 1 <= self.s_max <= 9999:
-            raise ValueError("s_max must be 1..9999")
-        if not (0 <= self.servo_up_deg <= 180 and 0 <= self.servo_down_deg <= 180):
+        if ranges.int_range(*ranges.S_MAX_RANGE)(self.s_max):
+            raise ValueError(f"s_max {ranges.int_range(*ranges.S_MAX_RANGE)(self.s_max)}")
+        if any(ranges.int_range(*ranges.SERVO_DEG_RANGE)(d) for d in (self.servo_up_deg, self.servo_down_deg)):
             raise ValueError("servo angles must be 0..180 degrees")
+        if ranges.int_range(*ranges.M300_DOWN_RANGE)(self.m300_down_max):
+            raise ValueError(f"m300_down_max {ranges.int_range(*ranges.M300_DOWN_RANGE)(self.m300_down_max)}")
         if self.rule not in RULES + ("",):
             raise ValueError(f"tool rule must be one of {', '.join(RULES)}")
         if self.tool == "laser" and self.rule == "z":
             raise ValueError("a laser takes S, not Z: Z is its focus")
         if not set(self.features) <= FEATURES:
             raise ValueError(f"build options must be among {', '.join(sorted(FEATURES))}")
-        if not 1 <= self.scale_q16 <= 1 << 24:
+        if not ranges.SCALE_Q16_MIN <= self.scale_q16 <= ranges.SCALE_Q16_MAX:
             raise ValueError("scale must be 1/65536..256")
+        if ranges.tool_z_um_problem(self.pen_z_um):
+            raise ValueError(f"the tool's Z threshold {ranges.tool_z_um_problem(self.pen_z_um)}")
         self._check_motion()
 
     @property
@@ -135,41 +135,21 @@ class MachineConfig:
         return self.pen_z_um + 5000
 
     def _check_motion(self) -> None:
-        if not (self.sample_hz >= 100 and self.tick_hz % self.sample_hz == 0):
-            raise ValueError(f"sample rate {self.sample_hz} Hz must be >= 100 Hz and divide the {self.tick_hz} Hz tick rate")
-        if len(self.accel_um_s2) != 2 or any(a <= 0 for a in self.accel_um_s2):
-            raise ValueError("acceleration must be > 0 on both axes")
-        if any(not 16 <= q < 1 << 22 for q in self.acc_q16):
-            lo, hi = (16 * self.sample_hz**2 + 65535) // 65536, ((1 << 22) - 1) * self.sample_hz**2 // 65536
-            raise ValueError(f"acceleration must be {lo / 1000:g}..{hi // 1000} mm/s^2 at {self.sample_hz} Hz samples")
-        if not 1 <= self.junction_dev_um <= 1000:
-            raise ValueError("junction deviation must be 0.001..1 mm")
-        if not MIN_FEED_UM_MIN <= self.max_feed_um_min or self.vn_max_q16 >= 1 << 24:
-            top = ((1 << 24) - 1) * 60 * self.sample_hz // 65536 // 1000
-            raise ValueError(f"max feed must be 1..{top} mm/min at {self.sample_hz} Hz samples")
+        """The firmware's integer ranges (nnik.machine.ranges, the scenario check's too)."""
+        if len(self.accel_um_s2) != 2:
+            raise ValueError("acceleration: one per axis")
+        for key, problem in ranges.motion_problems(self.accel_um_s2, self.junction_dev_um, self.max_feed_um_min,
+                                                   self.sample_hz):
+            raise ValueError(f"[motion] {key}: {problem}")
         if self.shaper.count("/") > 1 or any(k not in SHAPER_KINDS for k in self.shaper.split("/")):
             raise ValueError(f"shaper must be one of {', '.join(SHAPER_KINDS)}, or X/Y: one per axis")
         if (self.shaper == "none") != (not self.shaper_taps):
             raise ValueError("shaper taps are needed with a shaper, and none without")
-        if self.shaper_taps:
-            self._check_taps()
+        problem = ranges.shaper_problem(self.shaper_taps, self.max_feed_um_min, self.sample_hz) if self.shaper_taps else None
+        if problem:
+            raise ValueError(problem)
         if not 2 <= self.plan_blocks <= 64:
             raise ValueError("planner queue must be 2..64 blocks")
-
-    def _check_taps(self) -> None:
-        if len(self.shaper_taps) != 2:
-            raise ValueError("shaper taps: one (amplitudes, delays) per axis")
-        for amps, delays in self.shaper_taps:
-            if len(amps) != len(delays) or not 1 <= len(amps) <= MAX_SHAPER_TAPS or sum(amps) != 32768 or min(amps) < 0:
-                raise ValueError(f"shaper amplitudes must be 1..{MAX_SHAPER_TAPS} Q15 taps summing to 32768")
-            if min(delays) < 0 or max(delays) > 255:
-                raise ValueError("shaper delays must be 0..255 samples")
-        vmax_um = self.vn_max_q16 // 65536 + 2
-        if self.shaper_len * vmax_um >= 1 << 15:
-            raise ValueError("shaper too long for the max feed: its window sums would overflow int16")
-        if self.shaper_ram_bytes > SHAPER_RAM_BUDGET:
-            raise ValueError(f"shaper needs {self.shaper_ram_bytes} B of SRAM (> {SHAPER_RAM_BUDGET} B): "
-                             f"its longest delay, {self.shaper_len} samples, is too long; raise f or lower sample_hz")
 
     def pen_duty(self, down: bool) -> int:
         """OCR2A of the pen up or down (pen: 0 / 255; servo: the pulse in 64 us counts)."""
@@ -236,12 +216,14 @@ def default_machine(scn, shaper: str | None = None) -> MachineConfig:
     if sh == "auto":
         raise ValueError("shaper 'auto' is not available yet (it picks by contour error: the lead's part of issue 18)")
     taps, designs = axis_shapers(sh, dyn, getattr(scn, "shaper", None), sample_hz)
-    um = lambda key, default, k=1000.0: int(round(float(mo.get(key, default)) * k))  # noqa: E731
+    from nnik.machine.motion import MOTION
+
+    ints = ranges.motion_ints({**{k: p.default for k, p in MOTION.items()}, **mo, "sample_hz": sample_hz})
     origin = tuple(int(v) for v in (lo + hi) // 2)
     bounds = tuple(tuple(int(v) - o for v, o in zip(e, origin)) for e in (lo, hi))
     return MachineConfig(origin_um=origin, tool=kind, bounds_um=bounds, features=UNO_FEATURES,
-                         accel_um_s2=(um("accel_x_mm_s2", 1000.0), um("accel_y_mm_s2", 1000.0)),
-                         junction_dev_um=um("junction_deviation_mm", 0.01), max_feed_um_min=um("max_feed_mm_min", 3000.0),
+                         accel_um_s2=ints["accel_um_s2"], junction_dev_um=ints["jdev_um"],
+                         max_feed_um_min=ints["feed_um_min"],
                          sample_hz=sample_hz, shaper=sh, shaper_taps=taps, shaper_design=designs, **tool)
 
 

@@ -15,7 +15,8 @@ from nnik.files.pick_state import PickStatus, status
 _REFIT: dict = {}
 
 
-def refit(outdir: Path, family: str, config: dict, model_hash: str | None, source: str = "ladder"):
+def refit(outdir: Path, family: str, config: dict, model_hash: str | None, source: str = "ladder",
+          where: str = "the recorded selection's"):
     """The implementation behind a recorded row (the pick or a family's best), refitted, and
     checked to be the model that was recorded."""
     from nnik import pipeline
@@ -30,7 +31,12 @@ def refit(outdir: Path, family: str, config: dict, model_hash: str | None, sourc
             from nnik.implementations.mlp.family import fast_problem
 
             problem = fast_problem(problem)
-        impl = FAMILIES[family].fit(problem, config)
+        try:
+            impl = FAMILIES[family].fit(problem, config)
+        except (NnikError, TypeError, ValueError, KeyError, IndexError, AttributeError) as exc:  # a hand-edited one
+            why = str(exc) if isinstance(exc, NnikError) else f"{type(exc).__name__}: {str(exc)[:80]}"
+            raise NnikError(f"{where} {family} configuration {json.dumps(config)[:80]} cannot be refitted ({why}); "
+                            f"run `nnik select {outdir}`", str(outdir)) from None
         if model_hash is not None and impl.source_hash() != model_hash:
             raise NnikError(f"refitting the recorded {family} does not give the model that was verified; run "
                             f"`nnik select {outdir}`", str(outdir))
@@ -44,7 +50,7 @@ def pick_implementation(outdir: Path, st: PickStatus | None = None):
     if not st.ok:
         raise NnikError(st.message, str(outdir))
     m = st.marker
-    return refit(outdir, m["family"], m["config"], m["model_hash"], m.get("source", "ladder"))
+    return refit(outdir, m["family"], m["config"], m["model_hash"], m.get("source", "ladder"), "pick.json's")
 
 
 def verify_files(impl, c_dir: Path, target: str, work: Path) -> dict:

@@ -19,18 +19,20 @@ from __future__ import annotations
 
 from nnik.dynamics.shapers import KINDS
 from nnik.errors import NnikError
+from nnik.machine import ranges
 from nnik.machine.params import Param, validate_table, within
 
 SHAPERS = ("none",) + KINDS + ("auto",)
-TICK_HZ = 10_000  # the firmware's stepper interrupt; sample_hz must divide it
+TICK_HZ = ranges.TICK_HZ
 
+# the ranges of the feeds, accelerations and junction deviation are the firmware's integers'
+# (nnik.machine.ranges), checked together below: the acceleration's and the feed's depend on sample_hz
 MOTION = {
-    "accel_x_mm_s2": Param("float", default=1000.0, check=within(0.0, 1e6, open_lo=True, unit=" mm/s^2")),
-    "accel_y_mm_s2": Param("float", default=1000.0, check=within(0.0, 1e6, open_lo=True, unit=" mm/s^2")),
-    "junction_deviation_mm": Param("float", default=0.01, check=within(0.0, 10.0, unit=" mm")),
-    "max_feed_mm_min": Param("float", default=3000.0, check=within(1.0, 1e6, unit=" mm/min")),
-    "sample_hz": Param("int", default=1000, check=lambda v: None if v > 0 and TICK_HZ % v == 0 and v >= 100 else
-                       f"must divide the {TICK_HZ} Hz tick rate and be >= 100 Hz (e.g. 500, 1000, 2000), got {v}"),
+    "accel_x_mm_s2": Param("float", default=1000.0),
+    "accel_y_mm_s2": Param("float", default=1000.0),
+    "junction_deviation_mm": Param("float", default=0.01),
+    "max_feed_mm_min": Param("float", default=3000.0),
+    "sample_hz": Param("int", default=1000, check=ranges.sample_hz_problem),
     "shaper": Param("str", default="none", choices=SHAPERS),
     "max_contour_um": Param("float", check=within(0.0, 1e6, open_lo=True, unit=" um"), doc="auto's target"),
 }
@@ -55,6 +57,8 @@ def _pair(value, key: str, source: str) -> tuple[float, float]:
 def validate_motion(motion_raw, dynamics_raw, source: str) -> tuple[dict, dict | None]:
     """([motion] with defaults, [dynamics] as {"f_hz": (fx, fy), "zeta": (zx, zy)} or None)."""
     motion = validate_table(motion_raw, MOTION, source, "motion")
+    for key, problem in ranges.motion_problems(**ranges.motion_ints(motion)):
+        raise NnikError(problem, source, f"[motion] {key}")
     if dynamics_raw is None or dynamics_raw == {}:
         if motion["shaper"] != "none":
             raise NnikError(f"shaper {motion['shaper']!r} needs a [dynamics] table (f_hz, zeta)", source, "[motion] shaper")
@@ -81,4 +85,16 @@ def validate_motion(motion_raw, dynamics_raw, source: str) -> tuple[dict, dict |
         if v >= 1.0 and motion["shaper"] != "none":
             raise NnikError(f"zeta {v:g} >= 1 is overdamped: the axis does not ring, so there is nothing to shape; "
                             "set [motion] shaper = \"none\"", source, "[dynamics] zeta")
-    return motion, {"f_hz": f, "zeta": zeta}
+    dynamics = {"f_hz": f, "zeta": zeta}
+    if motion["shaper"] not in ("none", "auto"):
+        from nnik.dynamics.shapers import axis_taps
+
+        ints = ranges.motion_ints(motion)
+        try:
+            taps = axis_taps(motion["shaper"], dynamics, motion["sample_hz"])
+        except ValueError as exc:  # a damping ratio beyond what the shaper's design allows
+            raise NnikError(str(exc), source, "[motion] shaper") from None
+        problem = ranges.shaper_problem(taps, ints["feed_um_min"], motion["sample_hz"])
+        if problem:
+            raise NnikError(problem, source, "[motion] shaper")
+    return motion, dynamics

@@ -89,6 +89,18 @@ def _coerce(value: Any, p: Param) -> Any:
     raise AssertionError(p.kind)
 
 
+def value_problem(value: Any, p: Param) -> tuple[Any, str | None]:
+    """(the value as p's kind, None) or (None, the problem): the TOML key's one check, which the
+    command line's options of the same meaning use too (nnik.commands.option_types)."""
+    value = _coerce(value, p)
+    if isinstance(value, Exception):
+        return None, str(value)
+    if p.choices and value not in p.choices:
+        return None, f"must be one of {', '.join(map(str, p.choices))}; got {value!r}"
+    problem = p.check(value) if p.check is not None else None
+    return (None, problem) if problem else (value, None)
+
+
 def validate_table(
     table: Any, schema: dict[str, Param], source: str, section: str, owner: str | None = None
 ) -> dict[str, Any]:
@@ -108,14 +120,8 @@ def validate_table(
                 raise NnikError("missing required key", source, f"{where} {key}")
             out[key] = p.default
             continue
-        value = _coerce(table[key], p)
-        if isinstance(value, Exception):
-            raise NnikError(str(value), source, f"{where} {key}")
-        if p.choices and value not in p.choices:
-            raise NnikError(f"must be one of {', '.join(map(str, p.choices))}; got {value!r}", source, f"{where} {key}")
-        if p.check is not None:
-            problem = p.check(value)
-            if problem:
-                raise NnikError(problem, source, f"{where} {key}")
+        value, problem = value_problem(table[key], p)
+        if problem:
+            raise NnikError(problem, source, f"{where} {key}")
         out[key] = value
     return out

@@ -12,6 +12,7 @@ from nnik.machine.actuator import Actuator
 from nnik.emit.c_text import c_name_problem
 from nnik.errors import NnikError
 from nnik.machine.kinematics import KINDS, Mechanism, Workspace
+from nnik.machine import ranges
 from nnik.machine.kinematics.measured import check_marks_for_network
 from nnik.machine.motion import validate_motion
 from nnik.machine.shaper_table import validate_shaper
@@ -26,6 +27,7 @@ def _between(lo, hi):
     return lambda v: None if lo <= v <= hi else f"must be in [{lo}, {hi}], got {v}"
 
 
+MAX_SCENARIO_BYTES = 16 << 20  # a scenario is a page of TOML; its measured data is a CSV beside it
 MAX_POINTS = 2_000_000  # per split: float64 positions, targets and activations stay within RAM
 MAX_SEED = 2**32 - 1  # numpy, scipy and torch all take it
 MAX_WIDTH, MAX_DEPTH = 256, 4  # an 8-bit MCU runs nothing wider, and range analysis stays exact
@@ -109,14 +111,14 @@ TOOL = {  # the G-code firmware's tool on D11 (nnik.firmware.config.MachineConfi
     "kind": Param("str", default="laser", choices=("laser", "pen", "servo", "spindle", "knife", "none"),
                   doc="laser: M3/M4/M5 with S, Z its focus; pen, spindle, knife: down at or below pen_z_um "
                       "(D11 high); servo: the same, as a servo angle; none: nothing on D11"),
-    "m300_down_max": Param("int", default=40, check=lambda v: None if 0 <= v <= 10000 else f"must be in [0, 10000], got {v}",
+    "m300_down_max": Param("int", default=40, check=ranges.int_range(*ranges.M300_DOWN_RANGE),
                            doc="a servo-pen file's M300 S at or below this puts the pen down (unicorn: 30 down, 50 up)"),
-    "s_max": Param("int", default=1000, check=lambda v: None if 1 <= v <= 9999 else f"must be in [1, 9999], got {v}",
+    "s_max": Param("int", default=1000, check=ranges.int_range(*ranges.S_MAX_RANGE),
                    doc="S of full laser power (grbl's $30)"),
-    "pen_z_um": Param("int", default=0, check=lambda v: None if abs(v) <= 1_000_000 else f"must be within +/-1 m, got {v}",
+    "pen_z_um": Param("int", default=0, check=ranges.tool_z_um_problem,
                       doc="Z above this (um) lifts the pen"),
-    "servo_up_deg": Param("int", default=90, check=lambda v: None if 0 <= v <= 180 else f"must be in [0, 180], got {v}"),
-    "servo_down_deg": Param("int", default=30, check=lambda v: None if 0 <= v <= 180 else f"must be in [0, 180], got {v}"),
+    "servo_up_deg": Param("int", default=90, check=ranges.int_range(*ranges.SERVO_DEG_RANGE)),
+    "servo_down_deg": Param("int", default=30, check=ranges.int_range(*ranges.SERVO_DEG_RANGE)),
 }
 
 
@@ -231,6 +233,10 @@ class Scenario:
         check_marks_for_network(mechanism, network, source)
         training = validate_table(top["training"], TRAINING, source, "training")
         export = validate_table(top["export"], EXPORT, source, "export")
+        problem = ranges.input_units_problem(float(max(abs(v) for v in (*workspace.x_mm, *workspace.y_mm))),
+                                             export["input_unit_um"])
+        if problem:
+            raise NnikError(problem, source, "[export] input_unit_um")
         target = validate_table(top["target"], TARGET, source, "target")
         tool = validate_table(top["tool"], TOOL, source, "tool")
         motion, dynamics = validate_motion(top["motion"], top["dynamics"], source)
@@ -263,12 +269,19 @@ class Scenario:
 def load_scenario(path: str | Path) -> Scenario:
     path = Path(path)
     source = str(path)
+    if path.is_dir():
+        raise NnikError("a directory, not a scenario file", source)
     if not path.is_file():
         raise NnikError("scenario file not found", source)
     try:
-        raw = tomllib.loads(path.read_text())
+        if path.stat().st_size > MAX_SCENARIO_BYTES:
+            raise NnikError(f"{path.stat().st_size} bytes: no scenario is that large (at most "
+                            f"{MAX_SCENARIO_BYTES >> 20} MiB)", source)
+        raw = tomllib.loads(path.read_text())  # universal newlines: LF, CRLF, CR alone and mixed
     except tomllib.TOMLDecodeError as exc:
         raise NnikError(f"malformed TOML: {exc}", source) from None
     except UnicodeDecodeError:
         raise NnikError("not a UTF-8 text file", source) from None
+    except OSError as exc:
+        raise NnikError(f"cannot read: {exc.strerror or exc}", source) from None
     return Scenario.from_dict(raw, source, path.parent.resolve())

@@ -27,6 +27,8 @@ from nnik.machine.kinematics.base import Workspace
 from nnik.machine.scenario import MAX_SEED, Scenario
 
 EDGE_MARGIN_MM = 0.05  # keep noisy measurements inside the workspace
+N_MIN, N_MAX = 20, 1_000_000  # marks: enough for a fit, few enough for memory
+NOISE_UM_MAX = 1e4  # 1 sigma: 10 mm of noise is no measurement
 READINGS = ("commanded", "rounded")
 SAMPLING = ("sobol", "grid")
 
@@ -47,8 +49,8 @@ def measurements_csv(scn: Scenario, n: int, noise_um: float, seed: int, readings
     m = scn.mechanism
     if not m.analytic:
         raise NnikError("synth-csv needs an analytic machine to measure", scn.source, "[mechanism] kind")
-    if not (20 <= n <= 1_000_000) or not 0 <= noise_um <= 1e4:
-        raise NnikError(f"need 20 <= n <= 1000000 and 0 <= noise <= 10000 um (got n={n}, noise={noise_um})")
+    if not (N_MIN <= n <= N_MAX) or not 0 <= noise_um <= NOISE_UM_MAX:
+        raise NnikError(f"need {N_MIN} <= n <= {N_MAX} and 0 <= noise <= {NOISE_UM_MAX:g} um (got n={n}, noise={noise_um})")
     if not 0 <= seed <= MAX_SEED:
         raise NnikError(f"must be in [0, {MAX_SEED}], got {seed}", None, "--seed")
     if readings not in READINGS or sampling not in SAMPLING:

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -37,12 +36,9 @@ def load_metrics(model_dir: Path) -> dict:
     path = Path(model_dir) / METRICS_FILE
     if not path.is_file():
         raise NnikError("metrics.json not found (run `nnik run` or `nnik evaluate` first)", str(path))
-    try:
-        metrics = json.loads(path.read_text())
-    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-        raise NnikError(f"malformed metrics.json: {exc}", str(path)) from None
-    if not isinstance(metrics, dict):
-        raise NnikError("malformed metrics.json: not a JSON object", str(path))
+    from nnik.files.metrics import read_metrics
+
+    metrics = read_metrics(path)  # JSON, an object, and the shape of every key nnik reads back
     for k in ("name", "outputs", "unit"):
         if k not in metrics:
             raise NnikError(f"malformed metrics.json: missing {k!r}", str(path))

@@ -400,7 +400,7 @@ def test_no_metrics_is_one_clear_error(tmp_path):
     with pytest.raises(NnikError, match="metrics.json not found"):
         write_report(tmp_path)
     (tmp_path / "metrics.json").write_text("{not json")
-    with pytest.raises(NnikError, match="malformed metrics.json"):
+    with pytest.raises(NnikError, match="corrupt metrics file"):
         write_report(tmp_path)
 
 

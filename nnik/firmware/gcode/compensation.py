@@ -31,6 +31,7 @@ from nnik.firmware.config import axis_shapers
 from nnik.firmware.gcode.motion import interpret, plan_steps
 from nnik.firmware.gcode.steps import model_events
 from nnik.firmware.gcode.tip import tip_report
+from nnik.progress import bar
 
 METHODS = ("none",) + KINDS + ("precompensated",)
 AUTO_SLACK = 1.25  # without a target: within 25 % of the best contour max
@@ -111,7 +112,8 @@ def compare(scn, cfg, lines: list[str], ik, dyn: dict, source: str, methods=METH
     """Every method on the job: {method: figures} plus "auto" (the pick and what it traded).
     Methods that cannot be built (e.g. an overdamped axis has nothing to shape) carry "error"."""
     runs, out = {}, {}
-    for m in methods:
+    # a long job (a raster of 100,000 lines) spends minutes here: each method's run is said on a terminal
+    for m in bar(methods, desc="compensations: the firmware's model", unit="method", leave=False, position=1):
         if m == "precompensated":
             continue
         try:
@@ -133,7 +135,8 @@ def compare(scn, cfg, lines: list[str], ik, dyn: dict, source: str, methods=METH
         except ValueError as exc:
             out["precompensated"] = {"error": f"precompensated job: {exc}"}
     programmed = runs["none"][1].moves if "none" in runs else None
-    for m, (c, plan, seg, ev) in runs.items():
+    for m, (c, plan, seg, ev) in bar(runs.items(), total=len(runs), desc="compensations: the tip", unit="method",
+                                     leave=False, position=1):
         r = evaluate(scn, c, plan, seg, ev, dyn, moves=programmed, keep_track=m in keep)
         if robust:
             r["robust"] = {k: {key: v for key, v in evaluate(scn, c, plan, seg, ev, _perturbed(dyn, *fz),

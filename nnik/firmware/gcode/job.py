@@ -45,11 +45,30 @@ def tool_report(seg, cfg: MachineConfig) -> dict:
             "changes": int(len(model_tool_events(seg)))}
 
 
+PROGRESS_LINES = 2000  # a job this long shows its lines going through the model (on a terminal)
+SLOW_JOB_S = 60.0  # a job with more motion than this, at an average speed far below the max feed, is said
+SLOW_FRACTION = 0.01  # "far below": under 1 % of the max feed on average (an F1 typo: F1 is 1/3000 of 3000)
+
+
+def slow_job_warning(res: dict, cfg: MachineConfig) -> str | None:
+    """One line when the job's motion takes long for its length: the co-simulation runs for as
+    long (an F1 typo makes 10 mm take 600 s)."""
+    t = res["motion"]["job_s"]
+    mm = res["tool"]["on_mm"] + res["tool"]["travel_mm"]
+    feed = cfg.max_feed_um_min / 1000.0
+    if t < SLOW_JOB_S or mm / t * 60.0 >= SLOW_FRACTION * feed:
+        return None
+    return (f"the job moves {mm:.1f} mm in {t:.0f} s of motion, an average of {mm / t * 60.0:.3g} mm/min against the "
+            f"machine's max feed of {feed:g} mm/min (a mistyped F?); the chip's co-simulation simulates every second "
+            "of it")
+
+
 def python_model(outdir: Path, lines: list, cfg: MachineConfig, source: str, line_of: list[int] | None = None):
     """(plan, segments, events) of the firmware's logic; the first refused line -> NnikError
     FILE:LINE (line_of: the file's line number of each line)."""
     it = Interpreter(cfg)
-    for k, raw in enumerate(lines):
+    for k, raw in enumerate(bar(lines, desc="the firmware's model", unit="line", leave=False, position=1,
+                                disable=len(lines) < PROGRESS_LINES)):
         if it.line(raw) not in ("ok", "$"):
             raise NnikError(f"{source}:{line_of[k] if line_of else k + 1}: {it.last_error}")
     seg = plan_steps(it.plan, cfg, ik_oracle(outdir))
@@ -186,7 +205,7 @@ def machine_for(scn, shaper: str | None, seg_um: int | None) -> MachineConfig:
 
 def run_job(outdir: Path, job_path: Path, seg_um: int | None = None, use_chip: bool | None = None,
             shaper: str | None = None, precompensate: bool = False, opts: JobOptions | None = None,
-            check: bool = False, mcu: str = "atmega328p") -> dict:
+            check: bool = False, mcu: str = "atmega328p", scenario=None, warn=None) -> dict:
     """Run a job; use_chip None: on the simulated chip when the toolchain is there (mcu: the Uno's
     atmega328p or the Mega's atmega2560; the sketches are built while the Python model runs, and
     the job runs on simavr while the plot is drawn); shaper:
@@ -194,11 +213,13 @@ def run_job(outdir: Path, job_path: Path, seg_um: int | None = None, use_chip: b
     job rewritten offline for the belts (nnik.firmware.gcode.compensation); opts: flavour, tool,
     tool rule and the job's frame (--fit, --scale, --offset); check: parse and plan only (grbl's
     $C), no IK, no chip, nothing written.  With a [dynamics] table every method is compared on
-    the tip and the chosen one goes to the chip."""
+    the tip and the chosen one goes to the chip.  scenario: the machine's [motion], [dynamics] and
+    [tool] (default: the model's, as it was trained; `nnik job SCENARIO.toml` gives the TOML's).
+    warn: called at once with each warning line (a job whose motion is long for its length)."""
     from nnik.firmware.gcode import chip
 
     outdir, job_path = Path(outdir), Path(job_path)
-    scn = load_scenario_of(outdir)
+    scn = scenario if scenario is not None else load_scenario_of(outdir)
     if shaper is not None and shaper not in SHAPER_CHOICES:
         raise NnikError(f"unknown shaper {shaper!r}; choose one of {', '.join(SHAPER_CHOICES)}", None, "--shaper")
     asked = "precompensated" if precompensate else (shaper or (scn.motion or {}).get("shaper", "none"))
@@ -246,6 +267,11 @@ def run_job(outdir: Path, job_path: Path, seg_um: int | None = None, use_chip: b
                            "tool": cfg.tool, "tool_defines": cfg.defines()},
                "tool": tool_report(seg, cfg), "motion": motion_report(seg, cfg, scn.dynamics),
                **contour_report(scn, cfg, plan, seg, events)}
+        slow = slow_job_warning(res, cfg)
+        if slow:
+            res["warnings"] = [slow]
+            if warn is not None:
+                warn(slow)
         if res["clamped"]:
             raise NnikError(f"{res['clamped']} samples outside the IK's domain although the job fits the workspace: "
                             "a bug, please report it", str(job_path))

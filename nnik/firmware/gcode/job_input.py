@@ -8,10 +8,12 @@ workspace (its extent, the travel, and the option that would fit it).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 from nnik.errors import NnikError
+from nnik.machine import ranges
 from nnik.firmware.config import FEATURES, SCALE_ONE, TOOLS, MachineConfig
 from nnik.firmware.gcode import fit as fitting
 from nnik.firmware.gcode.flavour import FLAVOURS, choose_rule, detect, scan
@@ -72,8 +74,10 @@ def _check_options(opts: JobOptions) -> None:
         raise NnikError(f"unknown flavour {opts.flavour!r}; choose one of {', '.join(FLAVOURS)}", None, "--flavour")
     if opts.tool is not None and opts.tool not in TOOLS:
         raise NnikError(f"unknown tool {opts.tool!r}; choose one of {', '.join(TOOLS)}", None, "--tool")
-    if opts.scale is not None and not 1 / 65536 <= opts.scale <= 256:
-        raise NnikError("scale must be 1/65536..256", None, "--scale")
+    for flag, v, problem in (("--scale", opts.scale, ranges.scale_problem), ("--tool-z", opts.tool_z_mm, ranges.tool_z_problem),
+                             *(("--offset", o, ranges.offset_problem) for o in opts.offset or ())):
+        if v is not None and (not math.isfinite(v) or problem(v)):
+            raise NnikError(problem(v) or f"must be a finite number, got {v}", None, flag)
     if opts.fit and (opts.scale is not None or opts.offset is not None):
         raise NnikError("--fit chooses the scale and the offset itself: give --fit, or --scale/--offset", None, "--fit")
 
@@ -107,8 +111,6 @@ def prepare(lines: list[bytes], cfg: MachineConfig, opts: JobOptions, source: st
         except ValueError as exc:
             raise NnikError(str(exc), None, "--tool") from None
     if opts.tool_z_mm is not None:
-        if not abs(opts.tool_z_mm) <= 1000:
-            raise NnikError("must be within +-1000 mm", None, "--tool-z")
         cfg = replace(cfg, pen_z_um=int(round(opts.tool_z_mm * 1000)))
     rule, why = (opts.tool_rule, "--tool-rule") if opts.tool_rule else choose_rule(cfg.tool, flavour, facts)
     bounds = cfg.bounds_um

@@ -13,14 +13,14 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from nnik.files.atomic_write import replacing  # noqa: E402
-from nnik.firmware.gcode.plot import _path_points  # noqa: E402
+from nnik.firmware.gcode.plot import _lines, _path_points  # noqa: E402
 
 ZOOM_MM = 0.3
 
 
 def _draw(ax, plan, cfg, none, chosen, label):
-    for pts in _path_points(plan, cfg):
-        ax.plot(pts[:, 0], pts[:, 1], color="0.2", lw=1.0, zorder=3)
+    # one collection (a raster has a move per pixel: an artist each took most of a long job's time)
+    _lines(ax, _path_points(plan, cfg), color="0.2", lw=1.0, zorder=3)
     ax.plot(*none["tip_mm"].T, color="tab:red", lw=0.8, alpha=0.85, label="tip, no compensation", zorder=1)
     ax.plot(*chosen["tip_mm"].T, color="tab:green", lw=0.8, label=f"tip, {label}", zorder=2)
 

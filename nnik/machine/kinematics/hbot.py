@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from nnik.errors import NnikError
 from nnik.machine.kinematics.belt import BeltMechanism
 from nnik.machine.params import Param, length_mm
 
@@ -19,6 +20,12 @@ class HBot(BeltMechanism):
         "C_mm": Param("float", required=True, check=length_mm, doc="carriage width"),
         **BeltMechanism.BELT_PARAMS,
     }
+
+    def __init__(self, params, workspace, source="<scenario>"):
+        if not params["C_mm"] < params["X_mm"]:
+            raise NnikError(f"the carriage ({params['C_mm']:g} mm) must be narrower than the frame span X_mm "
+                            f"({params['X_mm']:g} mm) it runs in", source, "[mechanism] C_mm")
+        super().__init__(params, workspace, source)
 
     def to_uv(self, belt):
         X, C = self.params["X_mm"], self.params["C_mm"]

@@ -122,11 +122,11 @@ def test_dwell_and_m400_stop_the_motion_first():
 
 
 @pytest.mark.parametrize("kw, msg", [
-    ({"accel_um_s2": (0, 1000)}, "acceleration must be > 0"),
-    ({"accel_um_s2": (100, 1000)}, "acceleration must be"),
-    ({"sample_hz": 3000}, "sample rate 3000 Hz"),
-    ({"junction_dev_um": 0}, "junction deviation"),
-    ({"max_feed_um_min": 10**9}, "max feed must be"),
+    ({"accel_um_s2": (0, 1000)}, r"accel_x_mm_s2: must be in \[0.245, "),
+    ({"accel_um_s2": (100, 1000)}, "accel_x_mm_s2: must be in"),
+    ({"sample_hz": 3000}, "sample_hz: must divide the 10000 Hz tick rate"),
+    ({"junction_dev_um": 0}, "junction_deviation_mm: must be in"),
+    ({"max_feed_um_min": 10**9}, "max_feed_mm_min: must be in"),
     ({"shaper": "zvd"}, "shaper taps are needed"),
     ({"shaper": "zv", "shaper_taps": (((16384, 16383), (0, 10)), ((32768,), (0,)))}, "summing to 32768"),
     ({"shaper": "zv", "shaper_taps": (((16384, 16384), (0, 200)), ((32768,), (0,)))}, "SRAM"),
