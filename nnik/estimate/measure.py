@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from nnik.errors import NnikError
-from nnik.estimate.fast_features import fast_path
+from nnik.estimate.coverage import measurable
 from nnik.estimate.kernels import kernel_key, render_c, write_c
 from nnik.estimate.calibrations import BUILTIN_PROFILES
 from nnik.estimate.shifts import MAX_SHIFT, SHIFT_GROUPS, SHIFTS, shift_bench_c
@@ -112,7 +112,7 @@ def measure_kernel(prof: str, kern: str | None, wd: Path, say, jobs: int | None 
 
     def one(i: int, sp: CalSpec):
         im = synthetic_model(sp, kernel=kern)
-        if kern == "fast" and target == "pic18" and fast_path(im, target) == "c" and max(sp.hidden) > 3:
+        if kern == "fast" and not measurable(sp, im, target):
             # SDCC needs minutes to compile the unrolled C of a larger fast network (10 min for 2-17-3-2)
             say(f"[{prof}/{kkey}] {i + 1}/{len(specs)} {sp.label}: skipped (SDCC compile time of the fast C path)")
             return None

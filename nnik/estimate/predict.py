@@ -14,6 +14,7 @@ from nnik.estimate.kernels import kernel_key, model_kernel
 from nnik.estimate.calibrations import (CLOCKS_PER_CYCLE, GOAL_CYCLES_PCT, GOAL_FLASH_PCT, load_calibration,
                                     resolve_profile)
 from nnik.estimate.shifts import shift_offset
+from nnik.estimate.span import outside_span, structure_row
 from nnik.estimate.structure import structure
 from nnik.estimate.trace import typical_inputs
 from nnik.estimate.validity import reference_c_hash, stored_hash
@@ -136,6 +137,11 @@ def estimate(im, target: str, profile: str | None = None, clock_hz: int = 16_000
             validated = False
             notes.append(f"the fast kernel's {path} code with {s['layers']} hidden layer(s) was calibrated on hidden "
                          f"sizes up to {big or 0} only")
+    if kern == "fast" and "span_rows" in kc:
+        off = outside_span(structure_row(im, far, cal["target"]), kc["span_rows"])
+        if off:
+            validated = False
+            notes.append("a combination of counts no calibration network had (extrapolated): " + ", ".join(off))
     if missing or fmissing:
         validated = False
     # the last recorded sweep of this profile and kernel, for networks with as many layers

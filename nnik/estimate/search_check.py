@@ -23,19 +23,24 @@ from nnik.estimate.synthetic import CalSpec
 
 CHECK_DIR = REPO_ROOT / "build" / "estimator_search_check"
 WIDTHS = (3, 4, 5, 6, 8, 10, 12)  # nnik.search.space.MLP_WIDTHS (not imported: estimate stays below search)
+# nnik.search.space.MLP_TANH, "default" (the fast kernel's own table) spelt "" as CalSpec does
+TANHS = ("", "lerp32", "lerp64", "lerp_mr", "lerp_mr4", "minimax3_x11", "minimax2_x22", "paper_lsq5")
 MARGIN_PCT = 1.0  # added to the worst error seen, for the architectures no check has drawn
 KERNEL = "fast"
 
 
-def draw_specs(n: int, seed: int, depths: tuple[int, ...] = (1, 2)) -> list[CalSpec]:
-    """n random MLPs of the search space (seeded): depth, widths, full (galvo) or residual
-    (corexy), weight bits; weights as small as trained networks' (gain 0.35-1.0)."""
+def draw_specs(n: int, seed: int, depths: tuple[int, ...] = (1, 2), tanhs: tuple[str, ...] = TANHS,
+               widths: tuple[int, ...] = WIDTHS) -> list[CalSpec]:
+    """n random MLPs of the search space (seeded): depth, widths, full (galvo), residual (corexy)
+    or residual with a DAC clamp (dual), the tanh replacement, weight bits; weights as small as
+    trained networks' (gain 0.35-1.0)."""
     rng = np.random.default_rng(seed)
     out = []
     for i in range(n):
         depth = int(rng.choice(depths))
-        hidden = tuple(int(rng.choice(WIDTHS)) for _ in range(depth))
-        out.append(CalSpec("corexy" if rng.random() < 0.5 else "galvo", hidden, tanh="",
+        hidden = tuple(int(rng.choice(widths)) for _ in range(depth))
+        scenario = ("galvo", "corexy", "dual")[int(rng.integers(0, 3))]
+        out.append(CalSpec(scenario, hidden, tanh=str(rng.choice(tanhs)),
                            weight_bits=int(rng.choice((8, 16))), seed=int(rng.integers(1, 10**6)),
                            gain=float(rng.uniform(0.35, 1.0))))
     return out
@@ -66,7 +71,7 @@ def check(specs: list[CalSpec], profiles: list[str], n_vec: int = 60, workdir: P
                 continue
             r = run_profile(prof, csrc, im.name, vec, im.shape[-1], d / prof)
             meas = float(r["cycles_mean"])
-            row = {"spec": sp.label, "profile": prof, "mode": "residual" if sp.scenario == "corexy" else "full",
+            row = {"spec": sp.label, "profile": prof, "mode": "full" if sp.scenario == "galvo" else "residual",
                    "cycles_pred": round(est["cycles"], 1), "cycles_meas": meas,
                    "cycles_err_pct": round(100 * (est["cycles"] - meas) / meas, 2),
                    "stated_pct": est.get("cycles_error_pct"), "validated": est["validated"]}
