@@ -19,13 +19,12 @@ from pathlib import Path
 import numpy as np
 
 from nnik.estimate.calibrations import BUILTIN_PROFILES, REPO_ROOT, cal_path, forget_loaded
+from nnik.estimate.synthetic import SEARCH_TANHS as TANHS
 from nnik.estimate.synthetic import CalSpec
 
 CHECK_DIR = REPO_ROOT / "build" / "estimator_search_check"
 WIDTHS = (3, 4, 5, 6, 8, 10, 12)  # nnik.search.space.MLP_WIDTHS (not imported: estimate stays below search)
-# nnik.search.space.MLP_TANH, "default" (the fast kernel's own table) spelt "" as CalSpec does
-TANHS = ("", "lerp32", "lerp64", "lerp_mr", "lerp_mr4", "minimax3_x11", "minimax2_x22", "paper_lsq5")
-MARGIN_PCT = 1.0  # added to the worst error seen, for the architectures no check has drawn
+MARGIN_PCT = 0.5  # added to the worst error seen, for the architectures no check has drawn
 KERNEL = "fast"
 
 
@@ -82,6 +81,11 @@ def check(specs: list[CalSpec], profiles: list[str], n_vec: int = 60, workdir: P
     return rows
 
 
+def band(worst_pct: float) -> float:
+    """The band a check's worst |error| supports: plus MARGIN_PCT, rounded up to 0.1 %."""
+    return math.ceil(10 * (worst_pct + MARGIN_PCT) - 1e-9) / 10
+
+
 def record(rows: list[dict], seed: int) -> dict:
     """Store, per profile, the worst error of the check (plus MARGIN_PCT) on the networks whose
     estimate is validated (the others state no error) as what the estimator states about the fast
@@ -92,8 +96,10 @@ def record(rows: list[dict], seed: int) -> dict:
         worst = max(abs(r["cycles_err_pct"]) for r in rr)
         s = {"networks": len(rr), "seed": seed, "max_abs_cycles_err_pct": worst,
              "mean_abs_cycles_err_pct": round(float(np.mean([abs(r["cycles_err_pct"]) for r in rr])), 2),
-             "stated_cycles_err_pct": math.ceil(10 * (worst + MARGIN_PCT)) / 10,
+             "stated_cycles_err_pct": band(worst),
              "residual_networks": sum(r["mode"] == "residual" for r in rr),
+             "int8_networks": sum(":w8:" in r["spec"] for r in rr),
+             "two_layer_networks": sum(r["spec"].split(":")[1].count("-") == 3 for r in rr),
              "date": datetime.datetime.now(datetime.UTC).strftime("%Y-%m-%dT%H:%M:%SZ"),
              "command": "python3 -m nnik.estimate search-check --record"}
         path = cal_path(prof)

@@ -38,6 +38,10 @@ class CalSpec:
                 f":s{self.seed}:g{self.gain:g}:o{self.out_scale:g}" + (f":z{self.sparsity:g}" if self.sparsity else ""))
 
 
+# nnik.search.space.MLP_TANH (not imported: estimate stays below search), "default" (the fast
+# kernel's own table) spelt "" as CalSpec does
+SEARCH_TANHS = ("", "lerp32", "lerp64", "lerp_mr", "lerp_mr4", "minimax3_x11", "minimax2_x22", "paper_lsq5")
+
 # picked by nnik.estimate.coverage (python3 -m nnik.estimate.coverage): they widen the span of
 # the fast kernel's calibration to the counts of the networks the search proposes
 COVERAGE_SPECS: tuple[CalSpec, ...] = (
@@ -153,9 +157,15 @@ def calibration_specs(kernel: str | None = None, coverage: bool = True) -> list[
                       S("galvo", (3, 3), seed=102 + i, tanh="", gain=g, sparsity=z)]
     # every tanh variant: one and two hidden layers, pre-activations spread over all its regions
     for k, name in enumerate(activations.VARIANTS):
-        if fast:  # a portable variant inside the fast kernel (its C path): the two basic shapes
+        if fast:  # a portable variant inside the fast kernel (its C path): the two basic shapes, and
+            # one layer at the small gains of trained networks (pre-activations in the inner regions),
+            # full, residual and residual with a DAC clamp
             specs += [S("galvo", (17,), tanh=name, seed=100 + k, gain=3.0, n_vec=40),
-                      S("galvo", (3, 3), tanh=name, seed=200 + k, gain=3.0, n_vec=40)]
+                      S("galvo", (3, 3), tanh=name, seed=200 + k, gain=3.0, n_vec=40),
+                      S("galvo", (3,), tanh=name, seed=500 + k, gain=0.5, n_vec=40),
+                      S("corexy", (20,), tanh=name, seed=530 + k, gain=0.7, n_vec=24),
+                      S("dual", (17,), tanh=name, seed=560 + k, gain=0.4, weight_bits=8, n_vec=24),
+                      S("dual", (3,), tanh=name, seed=590 + k, gain=0.9, n_vec=40)]
             continue
         specs += [S("galvo", (17,), tanh=name, seed=100 + k, gain=3.0, n_vec=40),
                   S("galvo", (3, 3), tanh=name, seed=200 + k, gain=3.0, n_vec=40)]
