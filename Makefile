@@ -34,7 +34,9 @@ test: setup toolchains
 # sample loop CPU %, flash and SRAM; nnik.bench.motion), seed 003's table (its L path, reference
 # case and ten variations: the tip with each compensation; nnik.bench.seed003), and the speed of
 # `nnik job` on a 305 s raster: the Python model alone and with the simulated Uno, each over the
-# whole command, as times real time (nnik.bench.job_speed)
+# whole command, as times real time (nnik.bench.job_speed); the cost models against simavr and
+# gpsim: the MLP estimator on 60 random search networks (nnik.bench.estimator), the families'
+# on every shipped scenario and random machines (nnik.bench.costs); CI measures samples of both
 bench: setup toolchains
 	$(PYTHON) -m nnik.bench.mlp $(SCENARIO)
 	$(PYTHON) -m nnik.bench.families
@@ -47,6 +49,8 @@ bench: setup toolchains
 	$(PYTHON) -m nnik.bench.reproducible datasets/corexy_nonlinear.toml datasets/corexy_measured_2000.toml
 	$(PYTHON) -m nnik run datasets/corexy_nonlinear.toml > /dev/null && $(PYTHON) -m nnik.bench.builds build/galvo_cba2012 build/corexy_nonlinear
 	$(PYTHON) -m nnik.estimate sweep
+	$(PYTHON) -m nnik.bench.estimator
+	$(PYTHON) -m nnik.bench.costs
 	$(PYTHON) -m nnik.estimate sweep --kernel fast --tanh '' --arch 4 --arch 6 --arch 8 --arch 10 --arch 12 --arch 16
 	NNIK_HYPOTHESIS_EXAMPLES=300 $(PYTHON) -m pytest -q tests/firmware/gcode/test_gcode_hypothesis.py
 	NNIK_HYPOTHESIS_MACHINES=30 $(PYTHON) -m pytest -q tests/implementations/test_random_machines.py

@@ -41,14 +41,42 @@ def _weight_classes(W: np.ndarray, looped: bool) -> dict[str, int]:
     return {"u8": int(np.count_nonzero((a > 0) & (a < 256))), "u16": int(np.count_nonzero(a >= 256))}
 
 
+# Shifts by a constant amount n: each implementation is linear in n only between byte boundaries
+# and the special cases of its code (AVR asm: 4-, 3- or 2-byte steps by the tanh input shift's
+# range; SDCC: a byte loop then a bit loop; avr-gcc: byte moves or a loop), so every shift site
+# counts once and by its amount within the regime n falls in (features NAME[r] and NAME_n[r]).
+BYTE_REGIMES = ((1, 7), (8, 15), (16, 23), (24, 31))
+T_REGIMES = ((1, 7), (8, 14), (15, 15), (16, 16), (17, 23), (24, 31))
+F_REGIMES = ((1, 7), (8, 15), (16, 16), (17, 23), (24, 31))
+K_REGIMES = ((1, 7), (8, 8))
+
+
+def regime_of(n: int, regimes) -> str | None:
+    for lo, hi in regimes:
+        if lo <= n <= hi:
+            return f"{lo}_{hi}" if lo != hi else str(lo)
+    return None
+
+
+def _shift_terms(c: dict, name: str, n: int, count: float, regimes) -> None:
+    """Add `count` shift sites of amount n: NAME[regime] += count, NAME_n[regime] += count * n."""
+    r = regime_of(int(n), regimes)
+    if r is None or not count:
+        return
+    c[f"{name}[{r}]"] = c.get(f"{name}[{r}]", 0.0) + count
+    c[f"{name}_n[{r}]"] = c.get(f"{name}_n[{r}]", 0.0) + count * n
+
+
 def _fast_counts(im, target: str | None) -> tuple[str, dict[str, float]]:
     """Constant per-call counts of the fast kernel, prefixed by its code path."""
     s = structure(im)
     path = fast_path(im, target)
     o = im.out
     umax = _unroll_max()
-    c: dict[str, float] = {"call": 1.0, "multi_layer": float(s["layers"] > 1), "input_k_bits": float(np.sum(im.inp.K)),
+    c: dict[str, float] = {"call": 1.0, "multi_layer": float(s["layers"] > 1), 
                            "neuron_first": float(s["H"][0]), "neuron_deep": float(s["neurons_deep"])}
+    for K in np.asarray(im.inp.K).tolist():
+        _shift_terms(c, "input_k", int(K), 1, K_REGIMES)
     for li, L in enumerate(im.hidden):
         t = "first" if li == 0 else "hidden"
         looped = int(np.asarray(L.W).size) > umax
@@ -60,10 +88,7 @@ def _fast_counts(im, target: str | None) -> tuple[str, dict[str, float]]:
         sh = int(L.sh)
         key = _tanh_key(im, L)
         c[f"tanh[{key}]"] = c.get(f"tanh[{key}]", 0.0) + H
-        c["t_lo_bits"] = c.get("t_lo_bits", 0.0) + H * max(16 - sh, 0)
-        c["t_hi_bits"] = c.get("t_hi_bits", 0.0) + H * max(sh - 16, 0)
-        c["t_hi"] = c.get("t_hi", 0.0) + H * (sh > 16)
-        c["t_lo"] = c.get("t_lo", 0.0) + H * (sh < 16)
+        _shift_terms(c, "t_sh", sh, H, T_REGIMES)
         if L.saturate:
             c["sat_clamp"] = c.get("sat_clamp", 0.0) + H
     looped_out = any(int(np.asarray(L.W).size) > umax for L in im.hidden) and bool(
@@ -73,14 +98,15 @@ def _fast_counts(im, target: str | None) -> tuple[str, dict[str, float]]:
     e = 15 + int(o.g) - int(o.F)
     fold = e == 0 and not o.residual
     n_out = s["n_out"]
+    if path != "asm" or not _asm_output_terms(c, im, n_out):
+        _c_affine_terms(c, im, n_out)
     c["out_fold"] = float(n_out * fold)
-    c["out_fold_hi_bits"] = float(n_out * fold * max(int(o.F) - 16, 0))
-    c["out_fold_bits"] = float(n_out * fold * int(o.F))
-    c["out_e_pos_bits"] = float(n_out * (not fold) * max(e, 0))
-    c["out_e_pos"] = float(n_out * (not fold) * (e > 0))
-    c["out_e_neg"] = float(n_out * (e < 0))
-    c["out_F_bits"] = float(n_out * (not fold) * int(o.F))
     c["out_plain"] = float(n_out * (not fold))
+    _shift_terms(c, "out_foldF" if fold else "out_F", int(o.F), n_out, F_REGIMES)
+    if e > 0:
+        _shift_terms(c, "out_e_pos", e, n_out, BYTE_REGIMES)
+    elif e < 0:
+        _shift_terms(c, "out_e_neg", -e, n_out, BYTE_REGIMES)
     c["affine_term"] = float(n_out * s["n_in"] if s["residual"] else 0)
     for cl, n in s["affine_mul"].items():
         c[f"affine_mul[{cl}]"] = float(n)
@@ -90,13 +116,52 @@ def _fast_counts(im, target: str | None) -> tuple[str, dict[str, float]]:
     return path, {k: v for k, v in c.items() if v != 0 or k == "call"}
 
 
-def fast_cycle_features(im, in_um: np.ndarray, far: bool, target: str | None) -> dict[str, np.ndarray]:
+def _c_affine_terms(c: dict, im, n_out: int) -> None:
+    """The residual affine base in C: floor(d A / 2^G) as (d A1 + (d A0 >> P)) >> (G - P)."""
+    o = im.out
+    if not o.residual:
+        return
+    for k in range(n_out):
+        for j in range(int(im.shape[0])):
+            P, G = int(o.P[k][j]), int(o.G[k][j])
+            _shift_terms(c, "aff_p", P, 1, BYTE_REGIMES)
+            _shift_terms(c, "aff_gp", G - P, 1, BYTE_REGIMES)
+
+
+def _asm_output_terms(c: dict, im, n_out: int) -> bool:
+    """The assembly bodies' output stage (fastc_avr.output_asm_ok; False: the raw accumulators
+    are finished in C): in assembly, the affine base's 24 x 32 products skip the zero bytes of the
+    coefficient and shift by G (nnik_mac48, NNIK_P18_P48)."""
+    o = im.out
+    if not fastc_avr.output_asm_ok(im):
+        c["out_c_finish"] = float(n_out)
+        return False
+    if not o.residual:
+        return True
+    for k in range(n_out):
+        for j in range(int(im.shape[0])):
+            a = abs(fastc_avr.affine_a(o, k, j))
+            G = int(o.G[k][j])
+            c["aff_bytes"] = c.get("aff_bytes", 0.0) + sum(1 for b in range(4) if (a >> (8 * b)) & 0xFF)
+            c["aff_shl"] = c.get("aff_shl", 0.0) + max(16 - G, 0)
+            c["aff_sar"] = c.get("aff_sar", 0.0) + max(G - 16, 0)
+    return True
+
+
+def fast_counts_prefixed(im, far: bool, target: str | None) -> dict[str, float]:
+    """The constant per-call cycle features, prefixed by the code path."""
     path, c = _fast_counts(im, target)
+    f = {f"{path}:{k}": float(v) for k, v in c.items()}
+    if far:
+        f[f"{path}:far_neuron"] = float(sum(structure(im)["H"]))
+    return f
+
+
+def fast_cycle_features(im, in_um: np.ndarray, far: bool, target: str | None) -> dict[str, np.ndarray]:
+    path = fast_path(im, target)
     N = len(in_um)
     one = np.ones(N)
-    f = {f"{path}:{k}": v * one for k, v in c.items()}
-    if far:
-        f[f"{path}:far_neuron"] = float(sum(structure(im)["H"])) * one
+    f = {k: v * one for k, v in fast_counts_prefixed(im, far, target).items()}
     tr = hidden_trace(im, in_um)
     sat = np.zeros(N)
     for li, (v_in, T, hits) in enumerate(tr.layers):

@@ -7,6 +7,7 @@ import numpy as np
 from nnik.estimate.fast_features import fast_path
 from nnik.estimate.features import cycle_features, flash_features, frame_features, ram_features, size_features
 from nnik.estimate.shifts import shift_offset
+from nnik.estimate.span import span_rows
 
 
 def lstsq(rows: list[dict], y: np.ndarray, offset: np.ndarray, weights: np.ndarray | None = None) -> tuple[dict, dict]:
@@ -49,6 +50,10 @@ def _envelope(meas: list[dict]) -> dict:
     return env
 
 
+def _far(m: dict) -> bool:
+    return m.get("frame") is not None and m["frame"] > FAR_ABOVE
+
+
 def fit_measurements(meas: list[dict], tables: dict, kern: str | None = None) -> dict:
     """Least-squares fit of the cost coefficients to the measured calibration networks."""
     crow, cy, coff, cw, sizes, models = [], [], [], [], [], []
@@ -56,7 +61,7 @@ def fit_measurements(meas: list[dict], tables: dict, kern: str | None = None) ->
     for m in meas:
         im, vec = m["im"], m["vec"]
         fast = getattr(im, "kernel", None) == "fast"
-        far = m.get("frame") is not None and m["frame"] > FAR_ABOVE
+        far = _far(m)
         feats = cycle_features(im, vec, far=far, target=m.get("target"))
         off = 0.0 if fast else shift_offset(im, tables, "cycles")[0]
         for v in range(len(vec)):
@@ -100,6 +105,7 @@ def fit_measurements(meas: list[dict], tables: dict, kern: str | None = None) ->
         "ram": {"coef": _round(rcoef), "fit": rfit},
         "frame": frame_model,
         "envelope": _envelope(meas),
+        **({"span_rows": [_round(r) for r in span_rows(meas, _far)]} if kern == "fast" else {}),
         "models": models,
     }
 

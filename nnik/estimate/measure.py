@@ -3,13 +3,15 @@
 from __future__ import annotations
 
 import functools
+import hashlib
 import os
+import pickle
 from pathlib import Path
 
 import numpy as np
 
 from nnik.errors import NnikError
-from nnik.estimate.fast_features import fast_path
+from nnik.estimate.coverage import measurable
 from nnik.estimate.kernels import kernel_key, render_c, write_c
 from nnik.estimate.calibrations import BUILTIN_PROFILES
 from nnik.estimate.shifts import MAX_SHIFT, SHIFT_GROUPS, SHIFTS, shift_bench_c
@@ -100,6 +102,18 @@ def measure_shift_tables(profile: str, workdir: Path) -> dict:
     return tables
 
 
+def measurement_key(profile: str, csrc: Path, vec: np.ndarray) -> str:
+    """What a measurement depends on: the profile, the model's C (with the runtime headers and
+    harnesses, which the kernel's reference hash covers) and the input vectors."""
+    from nnik.estimate.validity import reference_c_hash
+
+    h = hashlib.sha256()
+    for part in (profile.encode(), reference_c_hash("fast").encode(), reference_c_hash(None).encode(),
+                 csrc.read_bytes(), np.ascontiguousarray(vec, dtype=np.int64).tobytes()):
+        h.update(part + b"\0")
+    return h.hexdigest()[:24]
+
+
 def measure_kernel(prof: str, kern: str | None, wd: Path, say, jobs: int | None = None) -> list[dict]:
     """Build and run every calibration network with one kernel: [{label, im, vec, cycles, flash, ram}].
     The networks are independent: `jobs` of them run at once (default: the CPU count, at most 4)."""
@@ -112,20 +126,28 @@ def measure_kernel(prof: str, kern: str | None, wd: Path, say, jobs: int | None 
 
     def one(i: int, sp: CalSpec):
         im = synthetic_model(sp, kernel=kern)
-        if kern == "fast" and target == "pic18" and fast_path(im, target) == "c" and max(sp.hidden) > 3:
+        if kern == "fast" and not measurable(sp, im, target):
             # SDCC needs minutes to compile the unrolled C of a larger fast network (10 min for 2-17-3-2)
             say(f"[{prof}/{kkey}] {i + 1}/{len(specs)} {sp.label}: skipped (SDCC compile time of the fast C path)")
             return None
         d = wd / kkey / f"m{i:02d}"
         csrc = write_c(im, d / "c", kernel=kern)
         vec = in_domain_vectors(im, sp.n_vec, seed=sp.seed + 7)
+        cached = wd / kkey / "cache" / f"{measurement_key(prof, csrc, vec)}.pkl"
+        if cached.is_file():  # the same C and vectors measured by an earlier run (simulators are deterministic)
+            m = pickle.loads(cached.read_bytes())
+            say(f"[{prof}/{kkey}] {i + 1}/{len(specs)} {sp.label}: {np.mean(m['cycles']):.0f} cycles (measured before)")
+            return {**m, "label": sp.label, "im": im, "vec": vec}
         r = run_profile(prof, csrc, im.name, vec, im.shape[-1], d / "w")
         frame = _avr_frame_size(prof, csrc, im.name) if target == "avr" else None
         say(f"[{prof}/{kkey}] {i + 1}/{len(specs)} {sp.label}: {r['cycles_mean']:.0f} cycles, "
             f"{r['model_flash_bytes']} B flash")
-        return {"label": sp.label, "im": im, "vec": vec, "cycles": r["cycles"].astype(float), "frame": frame,
-                "target": target, "flash": float(r["model_flash_bytes"]), "ram": float(r["model_ram_bytes"]),
-                "compiler": r["compiler"], "flags": r["compiler_flags"]}
+        m = {"cycles": r["cycles"].astype(float), "frame": frame, "target": target,
+             "flash": float(r["model_flash_bytes"]), "ram": float(r["model_ram_bytes"]),
+             "compiler": r["compiler"], "flags": r["compiler_flags"]}
+        cached.parent.mkdir(parents=True, exist_ok=True)
+        cached.write_bytes(pickle.dumps(m))
+        return {**m, "label": sp.label, "im": im, "vec": vec}
 
     # the random draws happen in synthetic_model with per-spec seeds: the order of completion is irrelevant
     with ThreadPoolExecutor(max_workers=jobs) as pool:

@@ -19,23 +19,27 @@ from pathlib import Path
 import numpy as np
 
 from nnik.estimate.calibrations import BUILTIN_PROFILES, REPO_ROOT, cal_path, forget_loaded
+from nnik.estimate.synthetic import SEARCH_TANHS as TANHS
 from nnik.estimate.synthetic import CalSpec
 
 CHECK_DIR = REPO_ROOT / "build" / "estimator_search_check"
 WIDTHS = (3, 4, 5, 6, 8, 10, 12)  # nnik.search.space.MLP_WIDTHS (not imported: estimate stays below search)
-MARGIN_PCT = 1.0  # added to the worst error seen, for the architectures no check has drawn
+MARGIN_PCT = 0.5  # added to the worst error seen, for the architectures no check has drawn
 KERNEL = "fast"
 
 
-def draw_specs(n: int, seed: int, depths: tuple[int, ...] = (1, 2)) -> list[CalSpec]:
-    """n random MLPs of the search space (seeded): depth, widths, full (galvo) or residual
-    (corexy), weight bits; weights as small as trained networks' (gain 0.35-1.0)."""
+def draw_specs(n: int, seed: int, depths: tuple[int, ...] = (1, 2), tanhs: tuple[str, ...] = TANHS,
+               widths: tuple[int, ...] = WIDTHS) -> list[CalSpec]:
+    """n random MLPs of the search space (seeded): depth, widths, full (galvo), residual (corexy)
+    or residual with a DAC clamp (dual), the tanh replacement, weight bits; weights as small as
+    trained networks' (gain 0.35-1.0)."""
     rng = np.random.default_rng(seed)
     out = []
     for i in range(n):
         depth = int(rng.choice(depths))
-        hidden = tuple(int(rng.choice(WIDTHS)) for _ in range(depth))
-        out.append(CalSpec("corexy" if rng.random() < 0.5 else "galvo", hidden, tanh="",
+        hidden = tuple(int(rng.choice(widths)) for _ in range(depth))
+        scenario = ("galvo", "corexy", "dual")[int(rng.integers(0, 3))]
+        out.append(CalSpec(scenario, hidden, tanh=str(rng.choice(tanhs)),
                            weight_bits=int(rng.choice((8, 16))), seed=int(rng.integers(1, 10**6)),
                            gain=float(rng.uniform(0.35, 1.0))))
     return out
@@ -66,7 +70,7 @@ def check(specs: list[CalSpec], profiles: list[str], n_vec: int = 60, workdir: P
                 continue
             r = run_profile(prof, csrc, im.name, vec, im.shape[-1], d / prof)
             meas = float(r["cycles_mean"])
-            row = {"spec": sp.label, "profile": prof, "mode": "residual" if sp.scenario == "corexy" else "full",
+            row = {"spec": sp.label, "profile": prof, "mode": "full" if sp.scenario == "galvo" else "residual",
                    "cycles_pred": round(est["cycles"], 1), "cycles_meas": meas,
                    "cycles_err_pct": round(100 * (est["cycles"] - meas) / meas, 2),
                    "stated_pct": est.get("cycles_error_pct"), "validated": est["validated"]}
@@ -75,6 +79,11 @@ def check(specs: list[CalSpec], profiles: list[str], n_vec: int = 60, workdir: P
                 print(f"{row['spec']:48s} {prof:11s} {row['cycles_pred']:8.0f} vs {meas:8.0f} "
                       f"({row['cycles_err_pct']:+.2f} %, stated ±{row['stated_pct']})", file=sys.stderr, flush=True)
     return rows
+
+
+def band(worst_pct: float) -> float:
+    """The band a check's worst |error| supports: plus MARGIN_PCT, rounded up to 0.1 %."""
+    return math.ceil(10 * (worst_pct + MARGIN_PCT) - 1e-9) / 10
 
 
 def record(rows: list[dict], seed: int) -> dict:
@@ -87,8 +96,10 @@ def record(rows: list[dict], seed: int) -> dict:
         worst = max(abs(r["cycles_err_pct"]) for r in rr)
         s = {"networks": len(rr), "seed": seed, "max_abs_cycles_err_pct": worst,
              "mean_abs_cycles_err_pct": round(float(np.mean([abs(r["cycles_err_pct"]) for r in rr])), 2),
-             "stated_cycles_err_pct": math.ceil(10 * (worst + MARGIN_PCT)) / 10,
+             "stated_cycles_err_pct": band(worst),
              "residual_networks": sum(r["mode"] == "residual" for r in rr),
+             "int8_networks": sum(":w8:" in r["spec"] for r in rr),
+             "two_layer_networks": sum(r["spec"].split(":")[1].count("-") == 3 for r in rr),
              "date": datetime.datetime.now(datetime.UTC).strftime("%Y-%m-%dT%H:%M:%SZ"),
              "command": "python3 -m nnik.estimate search-check --record"}
         path = cal_path(prof)

@@ -38,14 +38,75 @@ class CalSpec:
                 f":s{self.seed}:g{self.gain:g}:o{self.out_scale:g}" + (f":z{self.sparsity:g}" if self.sparsity else ""))
 
 
+# nnik.search.space.MLP_TANH (not imported: estimate stays below search), "default" (the fast
+# kernel's own table) spelt "" as CalSpec does
+SEARCH_TANHS = ("", "lerp32", "lerp64", "lerp_mr", "lerp_mr4", "minimax3_x11", "minimax2_x22", "paper_lsq5")
+
+# picked by nnik.estimate.coverage (python3 -m nnik.estimate.coverage): they widen the span of
+# the fast kernel's calibration to the counts of the networks the search proposes
+COVERAGE_SPECS: tuple[CalSpec, ...] = (
+    CalSpec('galvo_small', (3, 2), tanh='minimax2_x22', weight_bits=16, seed=5000, gain=0.3, out_scale=1, n_vec=12),
+    CalSpec('corexy', (17,), tanh='minimax2_x22', weight_bits=8, seed=5001, gain=0.3, out_scale=1, n_vec=12),
+    CalSpec('galvo', (3, 3), tanh='paper_lsq5', weight_bits=8, seed=5002, gain=2.5, out_scale=0.1, n_vec=12),
+    CalSpec('dual', (3, 1), tanh='', weight_bits=8, seed=5003, gain=0.7, out_scale=3, n_vec=12),
+    CalSpec('corexy', (3, 20), tanh='minimax3_x11', weight_bits=16, seed=5004, gain=0.3, out_scale=0.1, n_vec=12),
+    CalSpec('dual', (3, 1), tanh='lerp_mr', weight_bits=16, seed=5005, gain=0.3, out_scale=3, n_vec=12),
+    CalSpec('galvo_small', (3, 3), tanh='lerp_mr', weight_bits=8, seed=5007, gain=2.5, out_scale=30, n_vec=12),
+    CalSpec('corexy', (3, 2), tanh='lerp32', weight_bits=8, seed=5008, gain=1, out_scale=30, n_vec=12),
+    CalSpec('galvo_small', (2, 3), tanh='lerp_mr', weight_bits=8, seed=5009, gain=0.7, out_scale=0.01, n_vec=12),
+    CalSpec('dual', (3, 20), tanh='lerp_mr4', weight_bits=8, seed=5011, gain=0.8, out_scale=1, n_vec=12),
+    CalSpec('corexy', (3, 3), tanh='lerp_mr4', weight_bits=16, seed=5012, gain=0.4, out_scale=30, n_vec=12),
+    CalSpec('galvo', (1, 3), tanh='lerp64', weight_bits=8, seed=5014, gain=1, out_scale=0.01, n_vec=12),
+    CalSpec('dual', (1, 3), tanh='paper_lsq5', weight_bits=8, seed=5016, gain=1, out_scale=0.01, n_vec=12),
+    CalSpec('dual', (2, 3), tanh='', weight_bits=16, seed=5018, gain=0.4, out_scale=3, n_vec=12),
+    CalSpec('dual', (3, 20), tanh='minimax3_x11', weight_bits=16, seed=5022, gain=0.3, out_scale=30, n_vec=12),
+    CalSpec('dual', (3, 1), tanh='lerp64', weight_bits=16, seed=5023, gain=0.4, out_scale=1, n_vec=12),
+    CalSpec('galvo', (3, 2), tanh='', weight_bits=8, seed=5025, gain=0.6, out_scale=0.01, n_vec=12),
+    CalSpec('dual', (3,), tanh='lerp_mr4', weight_bits=16, seed=5028, gain=0.8, out_scale=1, n_vec=12),
+    CalSpec('dual', (3, 3), tanh='lerp_mr4', weight_bits=8, seed=5031, gain=2.5, out_scale=0.1, n_vec=12),
+    CalSpec('corexy', (3, 1), tanh='paper_lsq5', weight_bits=8, seed=5033, gain=0.3, out_scale=3, n_vec=12),
+    CalSpec('dual', (2, 3), tanh='lerp_mr', weight_bits=8, seed=5034, gain=2.5, out_scale=1, n_vec=12),
+    CalSpec('galvo_small', (17, 3), tanh='lerp64', weight_bits=8, seed=5037, gain=1, out_scale=30, n_vec=12),
+    CalSpec('galvo_small', (2, 3), tanh='lerp64', weight_bits=16, seed=5049, gain=0.5, out_scale=30, n_vec=12),
+    CalSpec('dual', (3, 20), tanh='', weight_bits=16, seed=5057, gain=0.4, out_scale=30, n_vec=12),
+    CalSpec('galvo', (3, 3), tanh='lerp32', weight_bits=8, seed=5084, gain=0.5, out_scale=30, n_vec=12),
+    CalSpec('dual', (3, 20), tanh='lerp_mr4', weight_bits=16, seed=5087, gain=0.3, out_scale=0.01, n_vec=12),
+    CalSpec('corexy', (17,), tanh='lerp32', weight_bits=16, seed=5105, gain=2.5, out_scale=30, n_vec=12),
+    CalSpec('corexy', (2, 3), tanh='minimax3_x11', weight_bits=8, seed=5128, gain=0.4, out_scale=1, n_vec=12),
+    CalSpec('dual', (3, 3), tanh='paper_lsq5', weight_bits=8, seed=5129, gain=0.5, out_scale=30, n_vec=12),
+    CalSpec('galvo', (20,), tanh='', weight_bits=8, seed=5132, gain=0.6, out_scale=1, n_vec=12),
+    CalSpec('dual', (3, 2), tanh='', weight_bits=8, seed=5135, gain=0.7, out_scale=1, n_vec=12),
+    CalSpec('galvo_small', (20,), tanh='', weight_bits=8, seed=5149, gain=1, out_scale=0.1, n_vec=12),
+    CalSpec('corexy', (3, 3), tanh='lerp64', weight_bits=8, seed=5167, gain=0.8, out_scale=30, n_vec=12),
+    CalSpec('corexy', (3, 20), tanh='lerp32', weight_bits=16, seed=5168, gain=1.5, out_scale=0.01, n_vec=12),
+    CalSpec('galvo_small', (17,), tanh='', weight_bits=8, seed=5179, gain=1.5, out_scale=1, n_vec=12),
+    CalSpec('galvo', (3, 3), tanh='lerp_mr', weight_bits=8, seed=5181, gain=1, out_scale=1, n_vec=12),
+    CalSpec('corexy', (20,), tanh='', weight_bits=8, seed=5196, gain=0.7, out_scale=1, n_vec=12),
+    CalSpec('corexy', (3, 3), tanh='minimax2_x22', weight_bits=16, seed=5205, gain=2.5, out_scale=0.01, n_vec=12),
+    CalSpec('dual', (3, 1), tanh='minimax3_x11', weight_bits=16, seed=5211, gain=2.5, out_scale=0.01, n_vec=12),
+    CalSpec('corexy', (20,), tanh='', weight_bits=8, seed=5233, gain=0.5, out_scale=3, n_vec=12),
+    CalSpec('corexy', (20,), tanh='', weight_bits=16, seed=5251, gain=0.4, out_scale=0.01, n_vec=12),
+    CalSpec('galvo_small', (20,), tanh='', weight_bits=8, seed=5272, gain=0.7, out_scale=1, n_vec=12),
+    CalSpec('galvo_small', (17,), tanh='', weight_bits=16, seed=5298, gain=2.5, out_scale=30, n_vec=12),
+    CalSpec('galvo', (20,), tanh='', weight_bits=8, seed=5370, gain=0.7, out_scale=30, n_vec=12),
+    CalSpec('dual', (3,), tanh='', weight_bits=8, seed=5372, gain=0.6, out_scale=0.01, n_vec=12),
+    CalSpec('dual', (2, 3), tanh='', weight_bits=16, seed=5511, gain=0.7, out_scale=0.1, n_vec=12),
+    CalSpec('corexy', (20,), tanh='', weight_bits=16, seed=5609, gain=0.8, out_scale=0.01, n_vec=12),
+    CalSpec('dual', (20,), tanh='', weight_bits=16, seed=9000, gain=0.8, out_scale=3, n_vec=12),
+    CalSpec('dual', (20,), tanh='', weight_bits=8, seed=9002, gain=0.8, out_scale=1, n_vec=12),
+    CalSpec('dual', (17,), tanh='', weight_bits=8, seed=9011, gain=1.5, out_scale=3, n_vec=12),
+    CalSpec('dual', (3,), tanh='', weight_bits=16, seed=9046, gain=1, out_scale=0.1, n_vec=12),
+)
+
 _SCENARIO_FILES = {"galvo": "galvo_cba2012", "galvo_small": "galvo_cba2012", "corexy": "corexy_nonlinear",
                    "dual": "galvo_dual_xy2"}
 JUDGED_SIZES = range(4, 17)
 
 
-def calibration_specs(kernel: str | None = None) -> list[CalSpec]:
+def calibration_specs(kernel: str | None = None, coverage: bool = True) -> list[CalSpec]:
     """The calibration set: hidden sizes outside 4-16 only (those are what the sweep judges).
-    For the fast kernel the structural networks use its own tanh tables (tanh="")."""
+    For the fast kernel the structural networks use its own tanh tables (tanh=""), and
+    COVERAGE_SPECS (nnik.estimate.coverage) span the counts of the networks the search proposes."""
     from nnik.implementations.mlp import tanh as activations
 
     base = "lerp_mr4" if "lerp_mr4" in activations.VARIANTS else activations.DEFAULT_VARIANT
@@ -96,9 +157,15 @@ def calibration_specs(kernel: str | None = None) -> list[CalSpec]:
                       S("galvo", (3, 3), seed=102 + i, tanh="", gain=g, sparsity=z)]
     # every tanh variant: one and two hidden layers, pre-activations spread over all its regions
     for k, name in enumerate(activations.VARIANTS):
-        if fast:  # a portable variant inside the fast kernel (its C path): the two basic shapes
+        if fast:  # a portable variant inside the fast kernel (its C path): the two basic shapes, and
+            # one layer at the small gains of trained networks (pre-activations in the inner regions),
+            # full, residual and residual with a DAC clamp
             specs += [S("galvo", (17,), tanh=name, seed=100 + k, gain=3.0, n_vec=40),
-                      S("galvo", (3, 3), tanh=name, seed=200 + k, gain=3.0, n_vec=40)]
+                      S("galvo", (3, 3), tanh=name, seed=200 + k, gain=3.0, n_vec=40),
+                      S("galvo", (3,), tanh=name, seed=500 + k, gain=0.5, n_vec=40),
+                      S("corexy", (20,), tanh=name, seed=530 + k, gain=0.7, n_vec=24),
+                      S("dual", (17,), tanh=name, seed=560 + k, gain=0.4, weight_bits=8, n_vec=24),
+                      S("dual", (3,), tanh=name, seed=590 + k, gain=0.9, n_vec=40)]
             continue
         specs += [S("galvo", (17,), tanh=name, seed=100 + k, gain=3.0, n_vec=40),
                   S("galvo", (3, 3), tanh=name, seed=200 + k, gain=3.0, n_vec=40)]
@@ -107,6 +174,8 @@ def calibration_specs(kernel: str | None = None) -> list[CalSpec]:
         # large shifts (small weights): the inlined tanh's unreachable branches disappear
         specs += [S("galvo", (3,), tanh=name, seed=400 + 10 * k + i, gain=g, n_vec=6)
                   for i, g in enumerate((0.5, 0.25, 0.12, 0.06))]
+    if fast and coverage:
+        specs += list(COVERAGE_SPECS)
     for sp in specs:
         if any(h in JUDGED_SIZES for h in sp.hidden):
             raise AssertionError(f"calibration network {sp.label} overlaps the judged sizes 4-16")

@@ -16,6 +16,8 @@ import re
 from functools import lru_cache
 from pathlib import Path
 
+from nnik.implementations.cost_band import stated_band
+
 CALIBRATION = Path(__file__).resolve().parents[2] / "calibration"
 TOLERANCE = 0.03
 
@@ -116,4 +118,5 @@ def estimate(impl, target: str) -> dict:
     ok = bool(c["validated"]) and calibration_current(type(impl))
     return {"cycles": float(c["cycles"][0] + c["cycles"][1] * cyc),
             "flash_bytes": int(round(c["flash"][0] + c["flash"][1] * code)) + impl.model_bytes(),
-            "ram_bytes": int(c.get("ram", ram)), "validated": ok}
+            "ram_bytes": int(c.get("ram", ram)), "validated": ok,
+            "cycles_error_pct": stated_band(cal, target)}

@@ -21,6 +21,8 @@ from pathlib import Path
 
 import numpy as np
 
+from nnik.implementations.cost_band import stated_band
+
 CALIBRATION = Path(__file__).resolve().parents[2] / "calibration" / "poly.json"
 TOLERANCE = 0.03
 ROOT = Path(__file__).resolve().parents[3]
@@ -133,8 +135,9 @@ def estimate(impl, target: str) -> dict:
     cyc = _predict(t["cycles"], c, FEATURES[target])
     flash = _predict(t["flash"], c, FLASH_FEATURES[target])
     ram = 0 if target == "avr" else 24 + 2 * len(impl.prog.steps)
-    return {"cycles": cyc, "flash_bytes": int(round(flash)), "ram_bytes": ram,
-            "validated": bool(cal.get("validated")) and _refs_unchanged(cal, type(impl))}
+    ok = bool(cal.get("validated")) and _refs_unchanged(cal, type(impl))
+    return {"cycles": cyc, "flash_bytes": int(round(flash)), "ram_bytes": ram, "validated": ok,
+            "cycles_error_pct": stated_band(cal, target)}
 
 
 # ---- the reference configurations (the calibration's key) ---------------------------------------

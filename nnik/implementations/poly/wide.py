@@ -26,6 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from nnik.implementations.c_common import i32
+from nnik.implementations.cost_band import stated_band
 from nnik.implementations.poly import int_model as poly_int
 
 WIDTH = 32
@@ -146,5 +147,6 @@ def estimate(impl, target: str) -> dict:
     def lin(coef):
         return float(coef[0] + sum(w * c[f] for w, f in zip(coef[1:], FEATURES)))
     ram = 0 if target == "avr" else 40 + 4 * len(impl.prog.steps)
+    ok = bool(cal.get("validated"))
     return {"cycles": lin(t["cycles"]), "flash_bytes": int(round(lin(t["flash"]))), "ram_bytes": ram,
-            "validated": bool(cal.get("validated"))}
+            "validated": ok, "cycles_error_pct": stated_band(cal, target)}

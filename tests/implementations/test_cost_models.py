@@ -1,0 +1,105 @@
+"""The families' cost models (poly, poly's wide path, lut, hybrid) against simavr and gpsim
+(nnik.bench.costs), configurations drawn as `nnik search` draws them.
+
+* Every claimed band is the measured one (the recorded check, nnik/calibration/*.json) and at
+  most 3 %; an estimate states it (``cycles_error_pct``).
+* CI, on simavr: every shipped scenario with one family each (the families in turn), and random
+  machines (hypothesis, seeded, NNIK_HYPOTHESIS_MACHINES examples) with every family; on gpsim a
+  sample of two.  Each measured error is within the band the estimate states.  `make bench`
+  measures every family on every scenario and more machines on both chips
+  (python3 -m nnik.bench.costs)."""
+
+from __future__ import annotations
+
+import json
+import os
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from nnik.bench import costs
+from nnik.implementations.cost_band import GOAL_PCT, stated_band
+
+EXAMPLES = int(os.environ.get("NNIK_HYPOTHESIS_MACHINES", "2"))
+KINDS = tuple(costs.KINDS)
+TARGETS = ("avr", "pic18")
+
+
+def _cal(kind: str) -> dict:
+    return json.loads(costs._cal_path(kind).read_text())
+
+
+OPEN = {"poly32": "poly's wide path measured -5.3 .. +40.4 % on simavr, -2.4 .. +20.5 % on gpsim (its model, calls "
+                   "and short shifts, misses the output shifts and the registers live across calls)",
+        "poly": "poly measured -3.0 .. +0.8 % on simavr (a degree-1 fit on a random machine): band 3.5 %"}
+
+
+@pytest.mark.parametrize("kind", [pytest.param(k, marks=pytest.mark.xfail(strict=True, reason=f"issue 25 part 4 open: "
+                                                                           f"{OPEN[k]}")) if k in OPEN else k
+                                  for k in KINDS])
+def test_every_claimed_band_is_measured_and_within_3_percent(kind):
+    cal = _cal(kind)
+    chk = cal["check"]["targets"]
+    assert "avr" in chk
+    for t, s in chk.items():
+        assert s["band_pct"] == costs.band_of(s["max_abs_pct"]), (kind, t)
+        assert s["cases"] >= 3, (kind, t)
+        assert stated_band(cal, t) == s["band_pct"]
+        assert s["band_pct"] <= GOAL_PCT, (kind, t, s)
+
+
+def test_a_check_states_its_band():
+    cal = {"check": {"targets": {"avr": {"band_pct": 9.5}}}}
+    assert stated_band(cal, "avr") == 9.5 and stated_band(cal, "pic18") is None and stated_band(None, "avr") is None
+
+
+@pytest.fixture(scope="module")
+def chips():
+    from nnik.targets import available
+
+    for t in TARGETS:
+        ok, why = available(t)
+        if not ok:
+            pytest.skip(why)
+
+
+IN_BAND = tuple(k for k in KINDS if k != "poly32")  # poly32: no model within any useful band (see OPEN)
+
+
+def _within_band(rows):
+    assert rows
+    for r in rows:
+        assert r["bit_exact"], r
+        assert abs(r["err_pct"]) <= (r["stated_pct"] if r["stated_pct"] is not None else GOAL_PCT), r
+
+
+@pytest.mark.parametrize("i,scenario", list(enumerate(costs.SCENARIOS)))
+def test_shipped_scenarios_on_simavr(chips, tmp_path, i, scenario):
+    kind = IN_BAND[i % len(IN_BAND)]
+    probs = {scenario: costs.problem_of(costs.DATASETS / f"{scenario}.toml")}
+    _within_band(costs.check(probs, [kind], ["avr"], 1, seed=i, workdir=tmp_path, say=lambda m: None))
+
+
+SETTINGS = dict(deadline=None, database=None, derandomize=True,
+                suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
+
+
+@settings(max_examples=EXAMPLES, **SETTINGS)
+@given(seed=st.integers(0, 2**31 - 1))
+def test_random_machines_on_simavr(chips, tmp_path_factory, seed):
+    wd = tmp_path_factory.mktemp("costs")
+    probs = costs.random_problems(1, seed, wd / "m")
+    _within_band(costs.check(probs, IN_BAND, ["avr"], 1, seed=seed, workdir=wd, say=lambda m: None))
+
+
+def test_a_sample_on_gpsim(chips, tmp_path):
+    rng = np.random.default_rng(7)
+    scenarios = [costs.SCENARIOS[int(k)] for k in rng.choice(len(costs.SCENARIOS), 2, replace=False)]
+    probs = {s: costs.problem_of(costs.DATASETS / f"{s}.toml") for s in scenarios}
+    kinds = [IN_BAND[int(k)] for k in rng.choice(len(IN_BAND), 2, replace=False)]
+    rows = []
+    for (label, p), kind in zip(probs.items(), kinds):
+        rows += costs.check({label: p}, [kind], ["pic18"], 1, seed=11, workdir=tmp_path, say=lambda m: None)
+    _within_band(rows)
