@@ -28,9 +28,9 @@ def _arch_label(hidden: Sequence[int], n_in: int = 2, n_out: int = 2) -> str:
     return "-".join(map(str, (n_in, *hidden, n_out)))
 
 
-def sweep_model(hidden: tuple[int, ...], tanh: str | None, cache: Path = SWEEP_DIR, train_seconds: float = 3.0,
+def sweep_model(hidden: tuple[int, ...], tanh: str | None, cache: Path = SWEEP_DIR,
                 kernel: str | None = None):
-    """A galvo_cba2012 network of the given hidden sizes, trained briefly (cached), quantised."""
+    """A galvo_cba2012 network of the given hidden sizes, trained on a small iteration budget (cached), quantised."""
     from nnik.implementations.mlp import quantize as fx
     from nnik import pipeline
     from nnik.machine.data import Dataset
@@ -41,7 +41,7 @@ def sweep_model(hidden: tuple[int, ...], tanh: str | None, cache: Path = SWEEP_D
     if not (out / pipeline.MODEL_FILE).is_file():
         scn = load_scenario(DATASETS / "galvo_cba2012.toml")
         scn.network["hidden"] = tuple(hidden)
-        scn.training.update(max_seconds=train_seconds, restarts=1)
+        scn.training.update(adam_steps=600, lbfgs_rounds=20, restarts=1)  # iterations: the same network anywhere
         scn.dataset.update(n_test=500)
         pipeline.generate(scn, out)
         pipeline.train(scn, out, progress=False)
