@@ -89,9 +89,9 @@ def test_evaluate_after_new_training_drops_the_old_pick(picked_run, tmp_path):
 
 
 @pytest.mark.parametrize("option,value,needle", [
-    ("--max-cycles", "-1", "max_cycles: must be > 0"),
-    ("--max-flash-bytes", "0", "max_flash_bytes: must be > 0"),
-    ("--max-error", "inf", "max_error"),
+    ("--max-cycles", "-1", "--max-cycles: must be > 0"),
+    ("--max-flash-bytes", "0", "--max-flash-bytes: must be > 0"),
+    ("--max-error", "inf", "--max-error: must be a finite number"),
 ])
 def test_select_refusing_a_limit_changes_nothing(picked_run, tmp_path, capsys, option, value, needle):
     run = copy_picked(picked_run, tmp_path / "run")
@@ -104,7 +104,7 @@ def test_arduino_into_an_existing_file(picked_run, tmp_path, capsys):
     run = copy_picked(picked_run, tmp_path / "run")
     f = tmp_path / "mine.txt"
     f.write_text("keep me\n")
-    fails(capsys, ["export", run, "--arduino", f], "exists and is not a directory", watch=tmp_path)
+    fails(capsys, ["export", run, "--arduino", f], "exists and is not a folder", watch=tmp_path)
 
 
 def test_arduino_under_a_file(picked_run, tmp_path, capsys):
@@ -121,7 +121,7 @@ def test_arduino_never_replaces_a_folder_it_did_not_write(picked_run, tmp_path, 
     mine.mkdir()
     (mine / "notes.txt").write_text("keep me\n")
     target = {"model_dir": run, "its_parent": tmp_path, "a_users_folder": mine}[where]
-    fails(capsys, ["export", run, "--arduino", target], "choose a new", watch=tmp_path)
+    fails(capsys, ["export", run, "--arduino", target], "give a new folder", watch=tmp_path)
 
 
 def test_arduino_replaces_its_own_earlier_library_whole(picked_run, tmp_path, capsys):

@@ -28,7 +28,8 @@ def same_file(a: Path, b: Path) -> bool:
         return Path(a).absolute().resolve() == Path(b).absolute().resolve()
 
 
-def _parent_ok(path: Path, what: str) -> None:
+def parent_ok(path: Path, what: str) -> None:
+    """The nearest existing folder above path is a writable folder (not a file)."""
     base = nearest_existing(path.parent)
     if not base.is_dir():
         raise NnikError(f"{base} is a file, so it cannot hold {what}", str(path))
@@ -47,7 +48,7 @@ def check_output_file(path: Path, inputs=(), what: str = "the output file") -> P
         if inp is not None and path.exists() and same_file(path, inp):
             raise NnikError(f"is an input of this command ({inp}); nnik never writes over its inputs, choose "
                             "another file", str(path))
-    _parent_ok(path, what)
+    parent_ok(path, what)
     return path
 
 
@@ -65,7 +66,7 @@ def check_replaceable_dir(path: Path, ours, inputs=(), what: str = "the output d
     if path.is_dir() and any(path.iterdir()) and not ours(path):
         raise NnikError(f"exists and is not {what} that nnik wrote; nnik replaces only its own, choose a new or "
                         "empty directory", str(path))
-    _parent_ok(path, what)
+    parent_ok(path, what)
     return path
 
 

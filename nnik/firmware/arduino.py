@@ -61,7 +61,7 @@ def check_libdir(libdir: Path, outdir: Path) -> Path:
 
     final, model = Path(libdir).resolve(), Path(outdir).resolve()
     if final == model or final in model.parents:
-        raise NnikError("the Arduino library would replace the model directory that it is exported from",
+        raise NnikError("the Arduino library would replace the model directory that it is exported from; give a new folder",
                         str(libdir), "--arduino")
     check_replaceable(Path(libdir), MARKER, "Arduino library")
     return Path(libdir)

@@ -102,11 +102,14 @@ def test_no_finished_pick_nothing_is_delivered(picked_run, tmp_path, capsys, spo
     elif spoil == "other model":
         (run / "data.npz").write_bytes((run / "data.npz").read_bytes() + b"\0")
     elif spoil == "evaluate another model":
+        import torch
+
         from nnik.implementations.mlp.train import TrainedModel
 
         model = TrainedModel.load(run / "model.pt")
-        model.train_seconds += 1.0  # another model.pt than the pick was made from (evaluating the
-        model.save(run / "model.pt")  # same one keeps the pick: tests/test_bad_input_dataloss.py)
+        with torch.no_grad():  # another model.pt than the pick was made from (evaluating the
+            next(model.net.parameters()).view(-1)[0] += 1e-9  # same one keeps the pick: test_bad_input_dataloss.py)
+        model.save(run / "model.pt")
         assert main(["evaluate", str(run)]) == 0  # metrics.json rewritten without the selection
         assert not marker.exists()
     else:
