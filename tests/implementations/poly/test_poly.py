@@ -165,7 +165,9 @@ def test_calibration_matches_the_emitted_c():
     im = PolyImpl.fit(problem("galvo_cba2012"), CBA5)
     for t in ("avr", "pic18"):
         e = im.estimate(t)
-        assert set(e) == {"cycles", "flash_bytes", "ram_bytes", "validated"}
+        # the recorded band, where one was measured on this target (nnik.implementations.cost_band)
+        assert {"cycles", "flash_bytes", "ram_bytes", "validated"} <= set(e) <= {
+            "cycles", "flash_bytes", "ram_bytes", "validated", "cycles_error_pct"}
         assert e["validated"] == cal["validated"]
         ref = cal["reference"][1][t]  # the same configuration, measured at calibration time
         assert abs(e["cycles"] - ref["cycles"]) < 0.03 * ref["cycles"]
