@@ -35,7 +35,7 @@ COMMANDS = {
     "export --arduino": ("picked", lambda r, s, t: ["export", r, "--arduino", r / "lib"]),
 }
 SLOW = ("run", "select", "search")
-LIMITS = (4096, 40_000)  # bytes: before the first real file, and between the small files and the large ones
+LIMITS = (2048, 40_000)  # bytes: below every real file (a tiny model.pt is 4 KB), and between the small files and the large ones
 
 
 def _setup(kind: str, tiny_run, request, dest: Path) -> tuple[Path, Path]:
@@ -69,7 +69,7 @@ def test_file_size_limit(tiny_run, request, tmp_path, command, limit):  # noqa: 
     proc = nnik(argv(run, toml, tmp_path), fsize=limit, cwd=tmp_path)
     outcome = check_after(proc, run, before)
     if limit == LIMITS[0] and command not in ("estimate", "tanh"):
-        assert outcome == "refused", proc.stdout[-500:]  # every other command writes a file larger than 4 KB
+        assert outcome == "refused", proc.stdout[-500:]  # every other command writes a file larger than 2 KB
 
 
 @pytest.mark.parametrize("command", ["generate", "report", "job", "verify", "synth-csv", "export --arduino"])
