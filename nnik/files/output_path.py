@@ -52,24 +52,6 @@ def check_output_file(path: Path, inputs=(), what: str = "the output file") -> P
     return path
 
 
-def check_replaceable_dir(path: Path, ours, inputs=(), what: str = "the output directory") -> Path:
-    """A directory that will be written whole: absent, empty, or one that ``ours(path)`` says nnik
-    wrote earlier (replaced as a whole, see :func:`replace_dir`). Never one holding an input."""
-    path = Path(path)
-    if not str(path).strip():
-        raise NnikError(f"an empty name for {what}")
-    if path.exists() and not path.is_dir():
-        raise NnikError(f"exists and is not a directory; choose a new directory for {what}", str(path))
-    for inp in inputs:
-        if inp is not None and path.exists() and (same_file(path, inp) or path.resolve() in Path(inp).resolve().parents):
-            raise NnikError(f"holds an input of this command ({inp}); choose a new directory for {what}", str(path))
-    if path.is_dir() and any(path.iterdir()) and not ours(path):
-        raise NnikError(f"exists and is not {what} that nnik wrote; nnik replaces only its own, choose a new or "
-                        "empty directory", str(path))
-    parent_ok(path, what)
-    return path
-
-
 def staging_dir(dest: Path) -> Path:
     """A new empty directory beside ``dest`` (the same file system, so it can be renamed onto it)."""
     dest = Path(dest)

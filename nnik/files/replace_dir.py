@@ -7,12 +7,12 @@ empty: a user's own folder is never wiped."""
 from __future__ import annotations
 
 import shutil
-import tempfile
 from contextlib import contextmanager
 from pathlib import Path
 
 from nnik.errors import NnikError
-from nnik.files.output_path import parent_ok, replace_dir
+from nnik.files.output_path import parent_ok, replace_dir, staging_dir
+
 
 def check_replaceable(dest: Path, marker: str, what: str) -> None:
     """NnikError unless dest is absent, empty, or a folder nnik wrote (marker inside)."""
@@ -26,22 +26,16 @@ def check_replaceable(dest: Path, marker: str, what: str) -> None:
                     "wrote; give a new folder, or empty this one", str(dest))
 
 
-def swap_in(new: Path, dest: Path) -> None:
-    """new (a complete folder beside dest) takes dest's place; dest's old content is removed."""
-    replace_dir(new, dest)
-
-
 @contextmanager
 def staged_folder(dest: Path, marker: str, what: str, stamp: str):
     """Yield a temporary folder beside dest to fill; on success it becomes dest (with the marker,
     holding `stamp`); on failure dest is as it was."""
     dest = Path(dest)
     check_replaceable(dest, marker, what)
-    dest.parent.mkdir(parents=True, exist_ok=True)
-    tmp = Path(tempfile.mkdtemp(prefix=f".{dest.name}.", suffix=".new", dir=dest.parent))
+    tmp = staging_dir(dest)
     try:
         yield tmp
         (tmp / marker).write_text(stamp)
-        swap_in(tmp, dest)
+        replace_dir(tmp, dest)
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
