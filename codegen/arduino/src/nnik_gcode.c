@@ -107,6 +107,9 @@ static void out_sample(nnik_gc_t *g, const int32_t p[2], uint16_t tool, uint32_t
     g->duty = (uint8_t)tool;
     if (tool & TOOL_SCALED) /* M4: the power follows the planned speed */
         g->duty = (uint8_t)((uint32_t)(uint8_t)tool * (v < vn ? v : vn) / vn);
+#if NNIK_SH_LEN > 0
+    g->duty = nnik_sh_tool(&g->sh, v, g->duty, (uint8_t)(tool >> 8)); /* ... and the shaped head */
+#endif
     g->steps[0] = out[0];
     g->steps[1] = out[1];
     g->segments++;
