@@ -173,12 +173,11 @@ def shaper_len(taps) -> int:
 
 
 def shaper_ram_bytes(taps) -> int:
-    """SRAM of the shaper's buffers: int16 increments and int16 window sums per axis, and the
-    tool's (nnik_sh_tool): a ring of length + 1 arc increments (2 B) and duties (1 B), its window
-    sums, the lag, the pointer's distance and delay, the ring's slot."""
+    """SRAM of the shaper's buffers (nnik_shaper.h): int16 increments and int16 window sums per
+    axis, the tool's progress window sums, its planned duty per sample and 6 B of state."""
     n = max((len(a) for a, _ in taps), default=0)
     length = shaper_len(taps)
-    return 2 * 2 * length + 2 * 2 * n + 1 + 3 * (length + 1) + 2 * n + 2 + 2 + 2 if length else 0
+    return 2 * 2 * length + 2 * 2 * n + 1 + length + 2 * n + 6 if length else 0
 
 
 def shaper_problem(taps, feed_um_min: int, sample_hz: int) -> str | None:
@@ -192,7 +191,7 @@ def shaper_problem(taps, feed_um_min: int, sample_hz: int) -> str | None:
             return (f"the shaper's delays must be 0..{SHAPER_MAX_DELAY} samples, got {max(delays)}: raise f_hz or "
                     "lower sample_hz")
     vmax_um = vn_q16(feed_um_min, sample_hz) // Q16 + 2
-    if max(shaper_len(taps), 2) * vmax_um >= 1 << 15:  # 2: the tool's arc increments keep bit 15 free
+    if shaper_len(taps) * vmax_um >= 1 << 15:
         return (f"shaper too long for the max feed: its window sums would overflow int16 ({shaper_len(taps)} samples "
                 f"at up to {vmax_um} um/sample); lower max_feed_mm_min or raise f_hz")
     if shaper_ram_bytes(taps) > SHAPER_RAM_BUDGET:

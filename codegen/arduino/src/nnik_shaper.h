@@ -12,15 +12,14 @@
  * window sums W_i as int16; nnik.firmware.config checks that NNIK_SH_LEN * (the largest move per
  * sample + 2 um) < 2^15, so every |W| < 2^15 and the sum of A_i W_i < 2^31.  NNIK_SH_LEN 0: no shaper, the samples pass unchanged, no memory.
  *
- * The tool follows the shaped head (nnik_sh_tool; nnik/firmware/gcode/tool_shaper.py repeats it):
- * the arc length run by the planner, Q[n] (increments ds = ceil(v / 2^15): half micrometres),
- * goes through axis 0's taps like a position: the head's shaped arc length is Qs[n] = Q[n] - lag[n],
- * lag = (16384 + sum_i A_i (Q[n] - Q[n - d_i])) >> 15.  The duty of sample n is the planned duty of
- * sample m, the first sample at or after the previous m (and n - NNIK_SH_LEN) with Q[m] >= Qs[n]:
- * the tool switches when the shaped head reaches the planned switch, not when the plan does.  M4's
- * planned duty is scaled by the shaped speed over the planned one, Qs[n] - Qs[n-1] over ds[m]
- * (capped at 255).  The memory: ds (bit 15: M4) and the planned duty of the last NNIK_SH_LEN + 1
- * samples, the window sums of ds, the last lag, the pointer's delay k and Q[n] - Q[n - k].
+ * The tool follows the shaped head (nnik/firmware/gcode/tool_shaper.py repeats it).  The plan's
+ * progress Q[n] (increments max(|dx|, |dy|) of its samples, from the rows above: on a straight
+ * move a fixed multiple of the arc length) goes through axis 0's taps as a third axis: the shaped
+ * head's progress is Q[n] - lag[n], lag = -((16384 - sum_i A_i (Q[n] - Q[n - d_i])) >> 15).  Sample
+ * n gets the planned duty (sh->t, set before the step) of sample m, the first at or after the
+ * previous m and n - NNIK_SH_LEN + 1 with Q[m] >= Q[n] - lag[n]: the tool switches when the shaped
+ * head reaches the planned switch (sh->duty).  Its memory: the window sums of Q, the planned
+ * duties of the last NNIK_SH_LEN samples, the pointer's delay k, m's slot and Q[n] - Q[m].
  */
 #ifndef NNIK_SHAPER_H
 #define NNIK_SHAPER_H
@@ -41,25 +40,19 @@ typedef struct {
     int32_t last[2]; /* p[n-1] */
 #if NNIK_SH_LEN > 0
     int16_t inc[2][NNIK_SH_LEN];
-    int16_t w[2][NNIK_SH_N];
+    int16_t w[3][NNIK_SH_N]; /* X, Y and the tool's progress */
     uint8_t at; /* slot of the next increment */
-    uint16_t ds[NNIK_SH_LEN + 1]; /* the tool's ring: arc increments, half um (bit 15: M4) */
-    uint8_t pd[NNIK_SH_LEN + 1];  /* and the planned duty */
-    uint16_t u[NNIK_SH_N];        /* window sums of ds */
-    uint16_t lag, e;              /* the last lag; Q[n] - Q[n - k] */
-    uint8_t k, tat;               /* the tool's delay in samples; the ring's newest slot */
+    uint8_t pd[NNIK_SH_LEN]; /* the tool: planned duties */
+    uint16_t wq[NNIK_SH_N];  /* window sums of the progress Q */
+    uint16_t e;              /* Q[n] - Q[m] */
+    uint8_t k, ms, t, duty;  /* n - m, m's slot; this sample's planned duty; the tool's duty */
 #endif
 } nnik_shaper_t;
 
 void nnik_sh_init(nnik_shaper_t *sh, const int32_t p[2]);
 
-/* the shaped point of the next sample p */
+/* the shaped point of the next sample p (and with a shaper the tool's sh->duty from sh->t) */
 void nnik_sh_step(nnik_shaper_t *sh, const int32_t p[2], int32_t out[2]);
-
-#if NNIK_SH_LEN > 0
-/* the duty for the next sample, planned at speed v (Q16 um/sample) with duty pd (m4: scaled) */
-uint8_t nnik_sh_tool(nnik_shaper_t *sh, uint32_t v, uint8_t pd, uint8_t m4);
-#endif
 
 #ifdef __cplusplus
 }

@@ -285,4 +285,4 @@ def run_ops_reference(ops: list[tuple], cfg: MachineConfig) -> Stream:
 def duty_of(stream: Stream, cfg: MachineConfig | None = None) -> np.ndarray:
     """OCR2A per segment: the tool word's duty, M4 (0x100) scaled by min(v, vn) / vn; with cfg's
     shaper, in step with the shaped head (nnik.firmware.gcode.tool_shaper)."""
-    return stream_duty(stream.kind, stream.speed, stream.vn, stream.tool, cfg)
+    return stream_duty(stream.kind, stream.speed, stream.vn, stream.tool, stream.planned, cfg)

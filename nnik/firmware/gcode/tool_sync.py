@@ -9,7 +9,8 @@ the IK gets: Segments.ends_um) each switch is measured along that path:
     the head left the cut).
 "Where the path passes" a point is its closest point to it while the shaped head can be there:
 from the planner's first sample of the run (or its last) to the shaper's longest delay after.
-Each switch comes with its step: the head's step on the segment it falls on plus the planner's
+Each switch comes with its step: the head's step on the segment it falls on (the first on, the
+first off: a segment's tool is the one where it ends) plus the planner's
 step across the cut's edge (a segment's tool is that of the planned sample its end maps to, and
 the edge is known to lie in that sample, not where in it; without a shaper the two are the same
 sample and the bound is one step).  The tool follows the head when |lead| and |lag| are within
@@ -82,7 +83,8 @@ def switches(plan, seg, cfg) -> list[dict]:
                     "lead_um": float(cum[n_on] - s_pass),
                     "on_step_um": float(cum[n_on + 1] - cum[n_on] + (plan_step[n_s] if cfg.shaper_len else 0)),
                     "lag_um": float(cum[n_last + 1] - e_pass),
-                    "off_step_um": float(cum[n_last + 1] - cum[n_last] + (plan_step[min(n_e + 1, N - 1)] if cfg.shaper_len else 0))})
+                    "off_step_um": float(cum[min(n_last + 2, N)] - cum[n_last + 1]
+                                         + (plan_step[min(n_e + 1, N - 1)] if cfg.shaper_len else 0))})
     return out
 
 
