@@ -63,7 +63,8 @@ void nnik_sh_step(nnik_shaper_t *sh, const int32_t p[2], int32_t out[2])
     uint8_t a;
 #if NNIK_SH_LEN > 0
     uint8_t at = sh->at;
-    int16_t d2 = 0; /* this sample's progress */
+    int16_t d2 = 0, oldest = (int16_t)progress(sh, at); /* this sample's progress; n - NNIK_SH_LEN's */
+    uint16_t lag = 0;
     for (a = 0; a < 3; a++) { /* X, Y, and the progress Q with axis 0's taps */
         int16_t d = a < 2 ? (int16_t)(p[a] - sh->last[a]) : d2, *inc = sh->inc[a & 1];
         int32_t sum = 16384;
@@ -75,8 +76,8 @@ void nnik_sh_step(nnik_shaper_t *sh, const int32_t p[2], int32_t out[2])
             uint8_t dk = NNIK_RD_U8(del + k);
             if (dk) { /* W += inc[n] - inc[n - dk] (read before the slot is written) */
                 uint8_t j = at >= dk ? (uint8_t)(at - dk) : (uint8_t)(at + NNIK_SH_LEN - dk);
-                *w = (int16_t)((int32_t)*w + d - (a < 2 ? inc[j] : (int16_t)progress(sh, j))); /* |W| < 2^15 */
-                sum -= (int32_t)NNIK_RD_U16(amp + k) * *w;
+                *w = (int16_t)((int32_t)*w + d - (a < 2 ? inc[j] : j == at ? oldest : (int16_t)progress(sh, j)));
+                sum -= (int32_t)NNIK_RD_U16(amp + k) * *w; /* |W| < 2^15 */
             }
         }
         if (a < 2) {
@@ -88,9 +89,10 @@ void nnik_sh_step(nnik_shaper_t *sh, const int32_t p[2], int32_t out[2])
             if (d > d2)
                 d2 = d;
         } else {
-            tool_step(sh, at, (uint16_t)-(sum >> 15));
+            lag = (uint16_t)-(sum >> 15);
         }
     }
+    tool_step(sh, at, lag);
     sh->at = (uint8_t)(at + 1 == NNIK_SH_LEN ? 0 : at + 1);
 #else
     for (a = 0; a < 2; a++) {

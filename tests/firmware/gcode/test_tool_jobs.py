@@ -47,7 +47,7 @@ def test_tool_style_job_equal_on_the_chip(corexy_run, tool_firmware, job):
 
 
 @pytest.mark.parametrize("kind", ["zvd", "3hump_ei"])
-@pytest.mark.parametrize("job", ["lasergrbl_raster", "grbl_cam_laser"])
+@pytest.mark.parametrize("job", ["lasergrbl_raster", "grbl_cam_laser", "lightburn_grbl"])
 def test_shaped_laser_jobs_equal_on_the_chip(corexy_run, tool_firmware, kind, job):
     """With a shaper the tool follows the shaped head (nnik_sh_tool, M4 scaled by the shaped
     speed): every tool change and step on the chip equals the model's, and the tool comes on
