@@ -46,19 +46,24 @@ def chip_loop(pd, planned, cfg):
     return np.array(out, dtype=np.int64)
 
 
+def random_stream(seed: int, vmax: int):
+    """(planned points (N, 2), planned duties (N,)): runs of steps in one direction (rests,
+    moves, reversals) and runs of random duties."""
+    rng = np.random.default_rng(seed)
+    runs = int(rng.integers(1, 12))
+    steps = np.repeat(rng.integers(-vmax, vmax + 1, (runs, 2)), rng.integers(1, 60, runs), axis=0)
+    steps[rng.random(len(steps)) < 0.1] = 0
+    planned = np.cumsum(steps, axis=0)
+    return planned, np.resize(np.repeat(rng.integers(0, 256, runs), rng.integers(1, 60, runs)), len(planned))
+
+
 @settings(max_examples=60, deadline=None)
 @given(kind=st.sampled_from(KINDS), f=st.floats(25, 90), zeta=st.floats(0.0, 0.2), hz=st.sampled_from([500, 1000]),
        seed=st.integers(0, 2**31), vmax=st.integers(1, 150))
 def test_bulk_model_equals_the_chips_loop(kind, f, zeta, hz, seed, vmax):
     base = MachineConfig(origin_um=(0, 0), sample_hz=hz)
     cfg = replace(base, shaper=kind, shaper_taps=shaper_taps(kind, {"f_hz": (f, f * 0.9), "zeta": (zeta, zeta)}, hz))
-    rng = np.random.default_rng(seed)
-    runs = int(rng.integers(1, 12))
-    # runs of steps in one direction (rests, moves, reversals), random duties per run
-    steps = np.repeat(rng.integers(-vmax, vmax + 1, (runs, 2)), rng.integers(1, 60, runs), axis=0)
-    steps[rng.random(len(steps)) < 0.1] = 0
-    planned = np.cumsum(steps, axis=0)
-    pd = np.resize(np.repeat(rng.integers(0, 256, runs), rng.integers(1, 60, runs)), len(planned))
+    planned, pd = random_stream(seed, vmax)
     want = chip_loop(pd.tolist(), [tuple(p) for p in planned.tolist()], cfg)
     assert np.array_equal(shaped_duty(pd, planned, cfg.shaper_taps[0], cfg.shaper_len), want)
 
@@ -103,12 +108,7 @@ def test_the_c_shaper_equals_the_model(tmp_path_factory, kind, kind_y, f, zeta, 
     subprocess.run(["gcc", "-std=c99", "-O1", "-Wall", "-Werror", f"-I{work}", f"-I{src / 'arduino' / 'src'}",
                     f"-I{src / 'runtime'}", str(work / "drv.c"), str(src / "arduino" / "src" / "nnik_shaper.c"),
                     "-o", str(work / "drv")], check=True)
-    rng = np.random.default_rng(seed)
-    runs = int(rng.integers(1, 12))
-    steps = np.repeat(rng.integers(-vmax, vmax + 1, (runs, 2)), rng.integers(1, 60, runs), axis=0)
-    steps[rng.random(len(steps)) < 0.1] = 0
-    planned = np.cumsum(steps, axis=0)
-    pd = np.resize(np.repeat(rng.integers(0, 256, runs), rng.integers(1, 60, runs)), len(planned))
+    planned, pd = random_stream(seed, vmax)
     text = "".join(f"{x} {y} {t}\n" for (x, y), t in zip(planned.tolist(), pd.tolist()))
     got = np.array([[int(v) for v in ln.split()] for ln in subprocess.run(
         [str(work / "drv")], input=text, capture_output=True, text=True, check=True).stdout.splitlines()])
