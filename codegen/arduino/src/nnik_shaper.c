@@ -63,35 +63,41 @@ void nnik_sh_step(nnik_shaper_t *sh, const int32_t p[2], int32_t out[2])
     uint8_t a;
 #if NNIK_SH_LEN > 0
     uint8_t at = sh->at;
-    int16_t d2 = 0, oldest = (int16_t)progress(sh, at); /* this sample's progress; n - NNIK_SH_LEN's */
+    int16_t d2 = 0, dd[2]; /* this sample's progress and increments (the rows take them last) */
     uint16_t lag = 0;
     for (a = 0; a < 3; a++) { /* X, Y, and the progress Q with axis 0's taps */
         int16_t d = a < 2 ? (int16_t)(p[a] - sh->last[a]) : d2, *inc = sh->inc[a & 1];
-        int32_t sum = 16384;
-        int16_t *w = sh->w[a];
+        int32_t sum = sh->s[a];
         const uint16_t *amp = AMPS[a & 1];
         const uint8_t *del = DELAYS[a & 1];
         uint8_t k;
-        for (k = 0; k < NNIK_SH_N; k++, w++) {
+        for (k = 0; k < NNIK_SH_N; k++) {
             uint8_t dk = NNIK_RD_U8(del + k);
-            if (dk) { /* W += inc[n] - inc[n - dk] (read before the slot is written) */
+            if (dk) { /* W_k += inc[n] - inc[n - dk] (read before the slot is written): S += A_k that */
                 uint8_t j = at >= dk ? (uint8_t)(at - dk) : (uint8_t)(at + NNIK_SH_LEN - dk);
-                *w = (int16_t)((int32_t)*w + d - (a < 2 ? inc[j] : j == at ? oldest : (int16_t)progress(sh, j)));
-                sum -= (int32_t)NNIK_RD_U16(amp + k) * *w; /* |W| < 2^15 */
+                int16_t dw = (int16_t)(d - (a < 2 ? inc[j] : (int16_t)progress(sh, j)));
+                if (dw) { /* 0 at a steady speed: no multiply */
+                    uint16_t A = NNIK_RD_U16(amp + k);
+                    sum += (int32_t)A * dw;
+                }
             }
         }
+        sh->s[a] = sum;
+        sum = (16384 - sum) >> 15; /* |S| < 2^30: nnik.firmware.config checks |W| < 2^15 */
         if (a < 2) {
-            inc[at] = d;
-            out[a] = p[a] + (sum >> 15);
+            dd[a] = d;
+            out[a] = p[a] + sum;
             sh->last[a] = p[a];
             if (d < 0)
                 d = (int16_t)-d;
             if (d > d2)
                 d2 = d;
         } else {
-            lag = (uint16_t)-(sum >> 15);
+            lag = (uint16_t)-sum;
         }
     }
+    sh->inc[0][at] = dd[0];
+    sh->inc[1][at] = dd[1];
     tool_step(sh, at, lag);
     sh->at = (uint8_t)(at + 1 == NNIK_SH_LEN ? 0 : at + 1);
 #else

@@ -62,7 +62,10 @@ def random_stream(seed: int, vmax: int):
        seed=st.integers(0, 2**31), vmax=st.integers(1, 150))
 def test_bulk_model_equals_the_chips_loop(kind, f, zeta, hz, seed, vmax):
     base = MachineConfig(origin_um=(0, 0), sample_hz=hz)
-    cfg = replace(base, shaper=kind, shaper_taps=shaper_taps(kind, {"f_hz": (f, f * 0.9), "zeta": (zeta, zeta)}, hz))
+    try:
+        cfg = replace(base, shaper=kind, shaper_taps=shaper_taps(kind, {"f_hz": (f, f * 0.9), "zeta": (zeta, zeta)}, hz))
+    except ValueError:  # beyond the SRAM budget: refused with one line (test_shaper)
+        return
     planned, pd = random_stream(seed, vmax)
     want = chip_loop(pd.tolist(), [tuple(p) for p in planned.tolist()], cfg)
     assert np.array_equal(shaped_duty(pd, planned, cfg.shaper_taps[0], cfg.shaper_len), want)
@@ -99,7 +102,11 @@ def test_the_c_shaper_equals_the_model(tmp_path_factory, kind, kind_y, f, zeta, 
     require_tool("gcc")
     dyn = {"f_hz": (f, f * 0.8), "zeta": (zeta, zeta)}
     tx, ty = shaper_taps(kind, dyn, hz), shaper_taps(kind_y, dyn, hz)
-    cfg = replace(MachineConfig(origin_um=(0, 0), sample_hz=hz), shaper=f"{kind}/{kind_y}", shaper_taps=(tx[0], ty[1]))
+    try:
+        cfg = replace(MachineConfig(origin_um=(0, 0), sample_hz=hz), shaper=f"{kind}/{kind_y}",
+                      shaper_taps=(tx[0], ty[1]))
+    except ValueError:  # beyond the SRAM budget: refused with one line (test_shaper)
+        return
     src = Path(__file__).resolve().parents[3] / "codegen"
     work = tmp_path_factory.mktemp("shaper_c")
     (work / "nnik_gcode_config.h").write_text("".join(f"#define {k} {v}\n" for k, v in cfg.motion_defines().items()
