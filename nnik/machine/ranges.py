@@ -173,10 +173,11 @@ def shaper_len(taps) -> int:
 
 
 def shaper_ram_bytes(taps) -> int:
-    """SRAM of the shaper's buffers: int16 increments and int16 window sums per axis."""
-    n = max((len(a) for a, _ in taps), default=0)
+    """SRAM of the shaper (nnik_shaper.h): the int16 increments per axis, the running sums of X, Y
+    and the tool's progress (int32), the ring's slot, the tool's planned duty per sample and its
+    6 B of state."""
     length = shaper_len(taps)
-    return 2 * 2 * length + 2 * 2 * n + 1 if length else 0
+    return 2 * 2 * length + 3 * 4 + 1 + length + 6 if length else 0
 
 
 def shaper_problem(taps, feed_um_min: int, sample_hz: int) -> str | None:

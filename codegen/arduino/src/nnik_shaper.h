@@ -9,8 +9,18 @@
  * (an arithmetic shift: floor), which is round half up of sum_i A_i * p[n - d_i] / 32768.  Before
  * the first sample every past p is the start point.  The memory holds the per-sample increments
  * p[n] - p[n-1] as int16 (NNIK_SH_LEN of them per axis: 2 * 2 * NNIK_SH_LEN bytes) and the running
- * window sums W_i as int16; nnik.firmware.config checks that NNIK_SH_LEN * (the largest move per
- * sample + 2 um) < 2^15, so every |W| < 2^15 and the sum of A_i W_i < 2^31.  NNIK_SH_LEN 0: no shaper, the samples pass unchanged, no memory.
+ * S = sum_i A_i W_i per axis as int32: each sample S += A_i (inc[n] - inc[n - d_i]), skipped where
+ * that is 0 (a steady speed); nnik.firmware.config checks that NNIK_SH_LEN * (the largest move per
+ * sample + 2 um) < 2^15, so every |W| < 2^15 and |S| < 2^30.  NNIK_SH_LEN 0: no shaper, the samples pass unchanged, no memory.
+ *
+ * The tool follows the shaped head (nnik/firmware/gcode/tool_shaper.py repeats it).  The plan's
+ * progress Q[n] (increments max(|dx|, |dy|) of its samples, from the rows above: on a straight
+ * move a fixed multiple of the arc length) goes through axis 0's taps as a third axis: the shaped
+ * head's progress is Q[n] - lag[n], lag = -((16384 - sum_i A_i (Q[n] - Q[n - d_i])) >> 15).  Sample
+ * n gets the planned duty (sh->t, set before the step) of sample m, the first at or after the
+ * previous m and n - NNIK_SH_LEN + 1 with Q[m] >= Q[n] - lag[n]: the tool switches when the shaped
+ * head reaches the planned switch (sh->duty).  Its memory: the running sum S of Q, the planned
+ * duties of the last NNIK_SH_LEN samples, the pointer's delay k, m's slot and Q[n] - Q[m].
  */
 #ifndef NNIK_SHAPER_H
 #define NNIK_SHAPER_H
@@ -31,14 +41,18 @@ typedef struct {
     int32_t last[2]; /* p[n-1] */
 #if NNIK_SH_LEN > 0
     int16_t inc[2][NNIK_SH_LEN];
-    int16_t w[2][NNIK_SH_N];
+    int32_t s[3];            /* sum_i A_i W_i of X, Y and the tool's progress, W_i = p[n] - p[n - d_i] */
     uint8_t at; /* slot of the next increment */
+    uint8_t pd[NNIK_SH_LEN]; /* the tool: planned duties */
+    uint16_t wq[NNIK_SH_N];  /* window sums of the progress Q */
+    uint16_t e;              /* Q[n] - Q[m] */
+    uint8_t k, ms, t, duty;  /* n - m, m's slot; this sample's planned duty; the tool's duty */
 #endif
 } nnik_shaper_t;
 
 void nnik_sh_init(nnik_shaper_t *sh, const int32_t p[2]);
 
-/* the shaped point of the next sample p */
+/* the shaped point of the next sample p (and with a shaper the tool's sh->duty from sh->t) */
 void nnik_sh_step(nnik_shaper_t *sh, const int32_t p[2], int32_t out[2]);
 
 #ifdef __cplusplus

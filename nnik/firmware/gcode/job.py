@@ -30,6 +30,7 @@ from nnik.firmware.gcode.motion import plan_steps
 from nnik.firmware.gcode.reader import sendable
 from nnik.firmware.ik_oracle import ik_oracle, load_scenario_of
 from nnik.firmware.gcode.plot import job_png
+from nnik.firmware.gcode.tool_sync import summary, switches
 from nnik.firmware.gcode.steps import chip_events, chip_tool_events, model_events, model_tool_events
 
 CLOCK_HZ = 16_000_000
@@ -265,7 +266,7 @@ def run_job(outdir: Path, job_path: Path, seg_um: int | None = None, use_chip: b
                "machine": {"origin_um": list(cfg.origin_um), "seg_um": cfg.seg_um, "tick_hz": cfg.tick_hz,
                            "sample_hz": cfg.sample_hz, "shaper": cfg.shaper,
                            "tool": cfg.tool, "tool_defines": cfg.defines()},
-               "tool": tool_report(seg, cfg), "motion": motion_report(seg, cfg, scn.dynamics),
+               "tool": {**tool_report(seg, cfg), "switches": summary(switches(plan, seg, cfg))}, "motion": motion_report(seg, cfg, scn.dynamics),
                **contour_report(scn, cfg, plan, seg, events)}
         slow = slow_job_warning(res, cfg)
         if slow:

@@ -37,6 +37,7 @@ class Segments:
     speed_q16: np.ndarray | None = None  # (S,) planned speed, Q16 um/sample (0 at rest)
     move: np.ndarray | None = None  # (S,) the move of each segment (rests: the move before)
     sample_hz: int = 1000
+    block: np.ndarray | None = None  # (S,) the push index of each sample's block (-1: a rest or the shaper's tail)
 
     @property
     def overspeed(self) -> int:
@@ -100,9 +101,9 @@ def plan_steps(plan: Plan, cfg: MachineConfig, ik) -> Segments:
     move = np.where(blk >= 0, bm[np.maximum(blk, 0)] if len(bm) else -1, -1)
     move = np.maximum(np.maximum.accumulate(move) if len(move) else move, 0)
     plan.seg_move = move
-    return Segments(shaped, steps, delta, ticks, clamped, duty_of(st), chord, kind,
+    return Segments(shaped, steps, delta, ticks, clamped, duty_of(st, cfg), chord, kind,
                     np.asarray(st.planned, dtype=np.int64).reshape(-1, 2), np.asarray(st.speed, dtype=np.int64),
-                    move, cfg.sample_hz)
+                    move, cfg.sample_hz, blk)
 
 
 def interpret(lines: list[str], cfg: MachineConfig) -> Plan:

@@ -24,6 +24,7 @@ from math import isqrt
 import numpy as np
 
 from nnik.firmware.config import MachineConfig
+from nnik.firmware.gcode.tool_shaper import stream_duty
 
 Q30 = 1 << 30
 U32 = 0xFFFFFFFF
@@ -281,10 +282,7 @@ def run_ops_reference(ops: list[tuple], cfg: MachineConfig) -> Stream:
     return st
 
 
-def duty_of(stream: Stream) -> np.ndarray:
-    """OCR2A per segment: the tool word's duty; M4 (0x100) scaled by min(v, vn) / vn."""
-    tool = np.asarray(stream.tool, dtype=np.int64)
-    v = np.minimum(np.asarray(stream.speed, dtype=np.int64), np.asarray(stream.vn, dtype=np.int64))
-    vn = np.asarray(stream.vn, dtype=np.int64)
-    base = tool & 0xFF
-    return np.where((tool & 0x100) != 0, base * v // vn, base)
+def duty_of(stream: Stream, cfg: MachineConfig | None = None) -> np.ndarray:
+    """OCR2A per segment: the tool word's duty, M4 (0x100) scaled by min(v, vn) / vn; with cfg's
+    shaper, in step with the shaped head (nnik.firmware.gcode.tool_shaper)."""
+    return stream_duty(stream.kind, stream.speed, stream.vn, stream.tool, stream.planned, cfg)

@@ -11,7 +11,9 @@ after the job.  Reported (um):
     planned motion (nnik.dynamics.ringing), the windows shifted by the shaper's delay (its
     centroid: the shaped command stops that much later);
   * its dynamic part: the peak of |tip's distance - the steps' own distance| in the same windows
-    (what the belts add; the steps' own, the floor, is IK + rounding + chord + the microstep).
+    (what the belts add; the steps' own, the floor, is IK + rounding + chord + the microstep);
+  * the tip's lag behind the head at every tool switch (tool_switch_lag_um), beside the head's
+    own lead at the switch (the job's tool.switches).
 """
 
 from __future__ import annotations
@@ -20,6 +22,7 @@ import numpy as np
 
 from nnik.dynamics.ringing import TAIL_S, event_index, ringing, tip_track
 from nnik.firmware.gcode.contour import _stats, path_dist_um, segment_moves, units_to_mm
+from nnik.firmware.gcode.tool_sync import switches
 
 
 def counts_per_tick(seg, ev: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -41,6 +44,16 @@ def shaper_delay_s(cfg) -> float:
     centroid (sum A_i d_i), the larger of the two axes'; 0 without a shaper."""
     taps = getattr(cfg, "shaper_taps", ()) or ()
     return max((sum(a * d for a, d in zip(amps, delays)) / 32768 / cfg.sample_hz for amps, delays in taps), default=0.0)
+
+
+def switch_lag(plan, seg, cfg, seg_start: np.ndarray, dyn_um: np.ndarray) -> dict:
+    """The belt tip's distance behind the head (um) at every tool switch on and off (the first
+    tick of the first on and of the first off segment: nnik.firmware.gcode.tool_sync)."""
+    if getattr(seg, "block", None) is None:
+        return _stats(np.zeros(0))
+    at = [s[k] for s in switches(plan, seg, cfg) if s.get("on_at") is not None for k in ("on_at", "off_after")]
+    ticks = np.minimum(seg_start[np.asarray(at, dtype=np.int64) + np.tile([0, 1], len(at) // 2)], len(dyn_um) - 1)
+    return _stats(dyn_um[ticks] if len(at) else np.zeros(0))
 
 
 def tip_report(scn, cfg, plan, seg, ev: np.ndarray, dyn: dict, moves=None, keep_track: bool = False) -> dict:
@@ -72,6 +85,7 @@ def tip_report(scn, cfg, plan, seg, ev: np.ndarray, dyn: dict, moves=None, keep_
            "ringing_floor_um": ringing(base_dev, cfg.tick_hz, at),
            "tail_s": TAIL_S,
            "model": {"f_hz": list(dyn["f_hz"]), "zeta": list(dyn["zeta"])}}
+    out["tool_switch_lag_um"] = switch_lag(plan, seg, cfg, seg_start, dyn_um)
     if keep_track:
         out["track"] = {"tip_mm": tip, "base_mm": held, "error_um": dev,
                         "time_s": np.arange(len(tip)) / cfg.tick_hz}
