@@ -6,15 +6,15 @@ import sys
 from pathlib import Path
 
 from rich.console import Console
-from rich.markup import escape
 from rich.table import Table
+from rich.text import Text
 
 from nnik.commands import common_options as co, option_types as opt
 from nnik.commands.model_dirs import OUTDIR_DEFAULT
 from nnik.errors import NnikError
 from nnik.files.outdir import JOB_DIR, check_model_dir
 
-console = Console()
+console = Console(markup=False)  # text, not markup: "[motion] max_contour_um", "- (no [dynamics])" as they are
 
 HELP = "run a G-code job on the simulated chip through the pick's firmware, step for step against the Python model"
 DESCRIPTION = ("Run a G-code file that CAM, a slicer, a laser or plotter tool wrote through the chip's firmware: its "
@@ -187,13 +187,13 @@ def cmd_job(args) -> dict:
 
 
 def job_table(res: dict) -> Table:
-    """The job's summary, one row per figure. Its cells are text, not rich markup: a scenario's
-    table names in brackets ("- (no [dynamics])") are printed as they are."""
+    """The job's summary, one row per figure. Its cells are Text, never read as rich markup on any
+    console: a scenario's table names in brackets ("- (no [dynamics])") are printed as they are."""
     from nnik.report.job_summary import JOB_HEADER, job_row
 
-    t = Table(title=escape(f"G-code job {res['job']} on {res['scenario']} ({res['seconds']:.2f} s of motion)"))
+    t = Table(title=Text(f"G-code job {res['job']} on {res['scenario']} ({res['seconds']:.2f} s of motion)"))
     t.add_column("item")
     t.add_column("result")
     for h, v in zip(JOB_HEADER, job_row(res)):
-        t.add_row(escape(h), escape(v))
+        t.add_row(Text(h), Text(v))
     return t

@@ -29,3 +29,13 @@ def test_job_table_prints_every_cell_as_it_is(tiny_run, tmp_path):  # noqa: F811
     assert "(no [dynamics])" in text and "(no )" not in text
     for h, v in zip(JOB_HEADER, job_row(res)):
         assert h in text and v in text, (h, v)
+
+
+def test_the_job_console_prints_brackets_as_they_are():
+    """Every other line `nnik job` prints (auto's "[motion] max_contour_um", a tool rule's reason)
+    goes through the module's console: text, not markup."""
+    from nnik.commands import job
+
+    with job.console.capture() as cap:
+        job.console.print("auto: zv (contour target 50.0 µm, [motion] max_contour_um)")
+    assert "[motion] max_contour_um" in cap.get()
