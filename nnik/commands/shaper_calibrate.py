@@ -32,8 +32,9 @@ def _zeta(text: str | None) -> float:
 
 
 def register(sub) -> None:
-    p = co.add_command(sub, "shaper-calibrate", HELP, HELP + ". " + __doc__.split("\n\n", 1)[1])
-    p.add_argument("log", help="Klipper's raw accelerometer CSV (#time,accel_x,accel_y,accel_z) or its PSD CSV "
+    description = HELP[:1].upper() + HELP[1:] + ". " + __doc__.split("\n\n", 1)[1]
+    p = co.add_command(sub, "shaper-calibrate", HELP, description)
+    p.add_argument("log", metavar="LOG", help="Klipper's raw accelerometer CSV (#time,accel_x,accel_y,accel_z) or its PSD CSV "
                    "(freq,psd_x,psd_y,psd_z,psd_xyz)")
     p.add_argument("--axis", choices=("x", "y", "xy"), help="the axis the log tested (default: from the file name, "
                    "raw_data_x_... / resonances_y_...; else both)")
