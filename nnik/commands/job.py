@@ -7,25 +7,28 @@ from pathlib import Path
 
 from rich.console import Console
 from rich.table import Table
+from rich.text import Text
 
-from nnik.commands import option_types as opt
+from nnik.commands import common_options as co, option_types as opt
+from nnik.commands.model_dirs import OUTDIR_DEFAULT
 from nnik.errors import NnikError
 from nnik.files.outdir import JOB_DIR, check_model_dir
 
-console = Console()
+console = Console(markup=False)  # text, not markup: "[motion] max_contour_um", "- (no [dynamics])" as they are
+
+HELP = "run a G-code job on the simulated chip through the pick's firmware, step for step against the Python model"
+DESCRIPTION = ("Run a G-code file that CAM, a slicer, a laser or plotter tool wrote through the chip's firmware: its "
+               "flavour and tool rule are detected (and said), it is planned with acceleration, shaped, run through "
+               "the pick's IK (c/NAME.c) in Python and on the simulated chip (simavr), step for step; the contour "
+               "error is measured against the programmed path. Writes MODEL_DIR/job/JOB.json and JOB.png.")
 
 
 def register(sub) -> None:
-    p = sub.add_parser("job", help="run a G-code job through the firmware (Python model and simulated Uno)",
-                       description="Run a G-code file that CAM, a slicer, a laser or plotter tool wrote through the "
-                                   "chip's firmware: its flavour and tool rule are detected (and said), it is planned "
-                                   "with acceleration, shaped, run through the pick's IK in Python and on the simulated "
-                                   "Uno, step for step; the contour error is measured against the programmed path. "
-                                   "Writes OUTDIR/job/JOB.json and JOB.png.")
-    p.add_argument("scenario", help="scenario TOML (its build directory) or a model directory")
-    p.add_argument("job", help="G-code file")
-    p.add_argument("-o", "--outdir", help="model directory (a directory) of the scenario TOML (default build/<name>/); "
-                   "an error with a model directory as the first argument")
+    p = co.add_command(sub, "job", HELP, DESCRIPTION, result=True)
+    p.add_argument("scenario", metavar="SCENARIO", help="scenario TOML (its model directory is -o's) or a model directory")
+    p.add_argument("job", metavar="JOB", help="G-code file")
+    co.add_outdir(p, "the scenario TOML's model directory, where the job's files go (its job/ folder); not with a "
+                  "model directory as SCENARIO", OUTDIR_DEFAULT)
     p.add_argument("--check", action="store_true", help="parse and plan only, as grbl's $C: extent, motion time, "
                    "tool-on length and every noted word; writes nothing")
     p.add_argument("--fit", action="store_true", help="scale the job down uniformly (never up) to fit the workspace and "
@@ -144,10 +147,9 @@ def behind_message(chip: dict, res: dict) -> str:
             f"behind the plan{load}; lower the feed or [motion] sample_hz, or run the job with fewer, longer lines")
 
 
-def cmd_job(args) -> None:
+def cmd_job(args) -> dict:
     from nnik.firmware.gcode.job import run_job
     from nnik.firmware.gcode.job_input import JobOptions
-    from nnik.report.job_summary import JOB_HEADER, job_row
 
     out, scn = _model_dir(args)
     from nnik.files.pick_state import require_deliverable
@@ -163,14 +165,9 @@ def cmd_job(args) -> None:
         c = res["check"]
         console.print(f"check: {res['lines']} lines, {c['blocks']} planner blocks, {c['motion_s']:.2f} s of motion "
                       f"(planned), tool on {c['tool_on_mm']:.1f} mm, travel {c['travel_mm']:.1f} mm")
-        return
+        return res
     print_gcode_summary(res["gcode"])
-    t = Table(title=f"G-code job {res['job']} on {res['scenario']} ({res['seconds']:.2f} s of motion)")
-    t.add_column("item")
-    t.add_column("result")
-    for h, v in zip(JOB_HEADER, job_row(res)):
-        t.add_row(h, v)
-    console.print(t)
+    console.print(job_table(res))
     if res.get("dynamics"):
         from nnik.report.job_dynamics import print_methods
 
@@ -186,3 +183,17 @@ def cmd_job(args) -> None:
         if not (chip["steps_equal"] and chip["replies_equal"] and chip["selftest_pass"]):
             raise NnikError("the simulated chip's steps or answers differ from the Python model", res["job"])
     console.print(f"plot: {res['png']}; figures: {Path(res['png']).with_suffix('.json')}")
+    return res
+
+
+def job_table(res: dict) -> Table:
+    """The job's summary, one row per figure. Its cells are Text, never read as rich markup on any
+    console: a scenario's table names in brackets ("- (no [dynamics])") are printed as they are."""
+    from nnik.report.job_summary import JOB_HEADER, job_row
+
+    t = Table(title=Text(f"G-code job {res['job']} on {res['scenario']} ({res['seconds']:.2f} s of motion)"))
+    t.add_column("item")
+    t.add_column("result")
+    for h, v in zip(JOB_HEADER, job_row(res)):
+        t.add_row(Text(h), Text(v))
+    return t

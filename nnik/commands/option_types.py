@@ -104,7 +104,7 @@ def path(text: str) -> str:
     return text
 
 
-PATH_DESTS = ("scenario", "model_dir", "outdir", "output", "arduino", "job", "target")
+PATH_DESTS = ("scenario", "model_dir", "outdir", "output", "arduino", "job", "source")
 
 
 def check_paths(parser: argparse.ArgumentParser) -> None:

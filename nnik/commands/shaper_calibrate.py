@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from nnik.commands import common_options as co
 from nnik.errors import NnikError
 
 HELP = ("find an axis's resonance and the input shaper for it from Klipper's resonance test log "
@@ -31,15 +32,17 @@ def _zeta(text: str | None) -> float:
 
 
 def register(sub) -> None:
-    p = sub.add_parser("shaper-calibrate", help=HELP, description=HELP + ". " + __doc__.split("\n\n", 1)[1])
-    p.add_argument("log", help="Klipper's raw accelerometer CSV (#time,accel_x,accel_y,accel_z) or its PSD CSV "
+    description = HELP[:1].upper() + HELP[1:] + ". " + __doc__.split("\n\n", 1)[1]
+    p = co.add_command(sub, "shaper-calibrate", HELP, description)
+    p.add_argument("log", metavar="LOG", help="Klipper's raw accelerometer CSV (#time,accel_x,accel_y,accel_z) or its PSD CSV "
                    "(freq,psd_x,psd_y,psd_z,psd_xyz)")
     p.add_argument("--axis", choices=("x", "y", "xy"), help="the axis the log tested (default: from the file name, "
                    "raw_data_x_... / resonances_y_...; else both)")
     p.add_argument("--damping-ratio", help="the damping ratio the shapers are designed "
                    "for (default 0.1, Klipper's)")
-    p.add_argument("-o", "--output", help="write the [shaper] lines to this file (a scenario fragment)")
-    p.add_argument("--png", help="draw the PSD and each shaper's response here (default: -o's name with .png)")
+    co.add_output_file(p, "where the [shaper] lines are written too, a scenario fragment", "none, printed only")
+    p.add_argument("--png", metavar="FILE", help="draw the PSD and each shaper's response here (a file; default: "
+                   "-o's name with .png)")
     p.set_defaults(func=run)
 
 

@@ -5,9 +5,30 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from rich.console import Console
+from nnik.commands import common_options as co, option_types as opt
+from nnik.report.console import console
 
-console = Console()
+HELP = "write a calibration CSV 'measured' on a simulated machine (for a measured-machine scenario)"
+DESCRIPTION = (
+    "Simulate measuring an analytic scenario's machine: command the head to N marks in its [workspace], read where "
+    "it went with --noise-um of measurement noise, and write the CSV (x_um,y_um,q1,q2) a measured-machine scenario "
+    "reads ([mechanism] kind = \"measured\"). The same scenario and --seed give the same CSV.")
+
+
+def register(sub) -> None:
+    p = co.add_command(sub, "synth-csv", HELP, DESCRIPTION)
+    p.add_argument("scenario", metavar="SCENARIO", help="scenario of the machine to 'measure' (an analytic one)")
+    co.add_output_file(p, "the calibration CSV it writes (x_um,y_um,q1,q2)", required=True)
+    p.add_argument("-n", type=opt.SYNTH_N, default=400, help="number of measured points (default 400)")
+    p.add_argument("--noise-um", type=opt.NOISE_UM, default=2.0, help="measurement noise, 1 sigma, per axis (default 2)")
+    p.add_argument("--readings", choices=("commanded", "rounded"), default="commanded",
+                   help="commanded: whole-step commands, the position measured (default); rounded: the head on each "
+                   "mark, q1/q2 the step counter's whole-step reading (+-0.5 of rounding)")
+    p.add_argument("--sampling", choices=("sobol", "grid"), default="sobol",
+                   help="scattered (sobol) marks or a k x k grid (k = ceil(sqrt(n)))")
+    p.add_argument("--inset-mm", type=opt.INSET_MM, default=0.05, help="marks this far inside [workspace] (default 0.05)")
+    co.add_seed(p, "the marks and the measurement noise", "CSV")
+    p.set_defaults(func=cmd_synth_csv)
 
 
 def scenario_inputs(scn) -> list[Path]:

@@ -91,7 +91,7 @@ def implementations(metrics: dict, t: str, tm: dict) -> list[dict]:
         out.append(dict(label=f"lut family best ({r.get('describe', 'lut')})", kind="lut",
                         keypath=("implementations", k, "targets", t), cycles=rt.get("cycles"),
                         flash=rt.get("flash_bytes"), ram=rt.get("ram_bytes"), err=r.get("delivered_max_abs"),
-                        err_key=keypath("implementations", k, "delivered_max_abs")))
+                        err_key=keypath("implementations", k, "delivered_max_abs"), picked=r.get("picked") is True))
     return out
 
 
@@ -99,6 +99,18 @@ def worst(err) -> float | None:
     if not isinstance(err, (list, tuple)) or not err or not all(finite(e) for e in err):
         return None
     return float(max(err))
+
+
+def lut_picked(metrics: dict) -> bool:
+    """The lut family's best is the pick (selection's row marked picked)."""
+    rows = metrics.get("implementations")
+    return isinstance(rows, list) and any(isinstance(r, dict) and r.get("family") == "lut" and r.get("picked") is True
+                                          for r in rows)
+
+
+def _pick_file(metrics: dict) -> str:
+    name = lookup(metrics, "selection", "pick", "file")
+    return f"c/{name}" if isinstance(name, str) else "c/NAME.c"
 
 
 def lut_verdicts(metrics: dict) -> tuple[list[str], list[str]]:
@@ -127,7 +139,8 @@ def lut_verdicts(metrics: dict) -> tuple[list[str], list[str]]:
                     f"({fmt(lut['cycles'], D_CYC)} vs {fmt(i['cycles'], D_CYC)}) and lower max error "
                     f"({fmt(le, D_UNIT)} vs {fmt(worst(i['err']), D_UNIT)} {unit}), at "
                     f"{fmt(lut['flash'], D_CYC)} vs {fmt(i['flash'], D_CYC)} bytes of flash. "
-                    "On this machine, consider flashing the table instead."
+                    + (f"The table is this machine's pick ({_pick_file(metrics)})." if lut["picked"]
+                       else "On this machine, consider flashing the table instead.")
                 )
         else:
             losses.append(f"On {t} the lut family's best ({fmt(lut['cycles'], D_CYC)} cycles, max error "

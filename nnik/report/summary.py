@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from nnik.report.document import D_CYC, D_LSB, D_UM, D_UNIT, D_US, Section, Table, finite, fmt, lookup, txt
-from nnik.report.measured import cycles_to_us, lut_verdicts, target_names, target_status
+from nnik.report.measured import cycles_to_us, lut_picked, lut_verdicts, target_names, target_status
 
 SUMMARY_HEADER = ("item", "result", "detail")
 DEFAULT_CLOCK_HZ = 16_000_000  # the simulated chips run at 16 MHz (targets/avr.py, targets/pic18.py)
@@ -114,7 +114,8 @@ def summary_rows(metrics: dict) -> list[tuple[str, ...]]:
         rows.append(_chip_row(f"mlp on {t}", t, tm, reason))
     wins, _ = lut_verdicts(metrics)
     if wins:
-        rows.append(("lut family best", "wins", wins[0] + (f" (and {len(wins) - 1} more)" if len(wins) > 1 else "")))
+        rows.append(("lut family best", "wins, the pick" if lut_picked(metrics) else "wins",
+                     wins[0] + (f" (and {len(wins) - 1} more)" if len(wins) > 1 else "")))
     onnx = metrics.get("onnx")
     if isinstance(onnx, dict):
         rows.append(("mlp ONNX vs torch", "ok" if onnx.get("ok") else "FAILED",

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from nnik.report.document import (D_CYC, D_DIFF, D_UNIT, D_US, Fig, Section, Table, finite, keypath, lookup,
                                   not_run_cell, num, txt)
-from nnik.report.measured import (clocks_per_cycle, cycles_to_us, implementations, lut_verdicts, pct_diff,
+from nnik.report.measured import (clocks_per_cycle, cycles_to_us, implementations, lut_picked, lut_verdicts, pct_diff,
                                   target_names, target_status, worst)
 
 PNG_COST = "cost_accuracy.png"
@@ -93,7 +93,8 @@ def build(ctx) -> Section:
     sec.tables.append(ca)
     wins, losses = lut_verdicts(m)
     for w in wins:
-        sec.verdicts.append(("bad", w))
+        # a table beating the MLP is bad news, unless the table is the pick
+        sec.verdicts.append(("good" if lut_picked(m) else "bad", w))
     for s in losses:
         sec.verdicts.append(("good", s))
     if ran and not wins and not losses:

@@ -1,0 +1,48 @@
+"""`nnik export MODEL_DIR`: the MLP's fixed-point C (c/mlp/), and with --arduino the pick's
+Arduino/PlatformIO library."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from nnik import pipeline
+from nnik.commands import common_options as co
+from nnik.commands.model_dirs import add_model_dir, evaluated_dir
+from nnik.report.console import console, print_accuracy
+
+HELP = "quantise the trained MLP and write its fixed-point C to c/mlp/; --arduino: the pick's Arduino library"
+DESCRIPTION = (
+    "Quantise the trained MLP (model.pt) and write its fixed-point C to MODEL_DIR/c/mlp/ (the scenario's kernel, "
+    "and the other kernel in c/mlp/<kernel>/ for comparison) and the float math.h IK to c/NAME_float.c, after the "
+    "range analysis proves no tensor overflows. With --arduino DIR, also write an Arduino/PlatformIO library around "
+    "the verified pick c/NAME.c (a self-test sketch with golden vectors and a G-code sketch); only a finished pick "
+    "is delivered, never the MLP in its place.")
+
+
+def register(sub) -> None:
+    p = co.add_command(sub, "export", HELP, DESCRIPTION)
+    add_model_dir(p)
+    p.add_argument("--arduino", metavar="DIR", help="also write the pick's Arduino/PlatformIO library to this "
+                   "directory (self-test and G-code example sketches)")
+    p.set_defaults(func=cmd_export)
+
+
+def cmd_export(args) -> None:
+    out = evaluated_dir(args.model_dir)
+    if args.arduino is not None:
+        from nnik.files.pick_state import require_deliverable
+        from nnik.firmware.arduino import check_libdir
+
+        # the library is firmware: only a finished pick whose c/NAME.c is the verified C (refused
+        # before anything is written; the MLP is never delivered in its place)
+        require_deliverable(out, "export --arduino")
+        check_libdir(Path(args.arduino), out)  # DIR too, before c/ is touched
+    im, _ = pipeline.export(out)
+    console.print(f"wrote {out / pipeline.MLP_DIR}/{im.name}.h and {im.name}.c ({im.weights_bytes()} bytes of tables)")
+    if args.arduino is not None:
+        from nnik.firmware.arduino import export_arduino
+
+        lib = export_arduino(out, Path(args.arduino))
+        console.print(f"wrote Arduino library {lib['libname']} to {lib['dir']}/ (examples {lib['name']}_selftest with "
+                      f"{lib['golden']} golden vectors, {lib['name']}_gcode)")
+    print_accuracy(pipeline.load_metrics(out))
