@@ -146,12 +146,15 @@ def _cal_path(kind: str) -> Path:
 
 
 def record(summ: dict, how: str) -> None:
-    """Store each kind's measured band per target in its calibration file ("check")."""
+    """Store each kind's measured band per target in its calibration file ("check"), replacing
+    the targets this run measured."""
     for kind, per_t in summ.items():
         path = _cal_path(kind)
         cal = json.loads(path.read_text())
-        cal["check"] = {"how": how, "targets": {t: {**s, "band_pct": band_of(s["max_abs_pct"])}
-                                                for t, s in per_t.items()}}
+        chk = cal.get("check") or {"targets": {}}
+        for t, s in per_t.items():  # a run on some targets keeps the others' recorded bands
+            chk["targets"][t] = {**s, "band_pct": band_of(s["max_abs_pct"]), "how": how}
+        cal["check"] = {"targets": chk["targets"]}
         path.write_text(json.dumps(cal, indent=1) + "\n")
     load_lut_cal.cache_clear()
 
@@ -221,8 +224,8 @@ def main(argv: list[str] | None = None) -> int:
         for t, s in per_t.items():
             print(f"{kind:7s} {t:5s} {s['cases']:3d} cases  error {s['min_pct']:+.2f} .. {s['max_pct']:+.2f} %")
     if a.record:
-        record(summ, f"python3 -m nnik.bench.costs --per-scenario {a.per_scenario} --machines {a.machines} "
-                     f"--seed {a.seed} --targets {a.targets}")
+        record(summ, f"python3 -m nnik.bench.costs --kinds {a.kinds} --per-scenario {a.per_scenario} "
+                     f"--machines {a.machines} --seed {a.seed} --targets {a.targets}")
     worst = max((s["max_abs_pct"] for k in summ.values() for s in k.values()), default=0.0)
     return 0 if worst <= BAND_GOAL_PCT else 1
 

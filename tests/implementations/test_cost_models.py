@@ -3,7 +3,7 @@
 
 * Every claimed band is the measured one (the recorded check, nnik/calibration/*.json) and at
   most 3 %; an estimate states it (``cycles_error_pct``).
-* CI, on simavr: every shipped scenario with one family each (the families in turn), and random
+* CI, on simavr: every shipped scenario with one family each (the families in turn, poly32 included), and random
   machines (hypothesis, seeded, NNIK_HYPOTHESIS_MACHINES examples) with every family; on gpsim a
   sample of two.  Each measured error is within the band the estimate states.  `make bench`
   measures every family on every scenario and more machines on both chips
@@ -31,9 +31,10 @@ def _cal(kind: str) -> dict:
     return json.loads(costs._cal_path(kind).read_text())
 
 
-OPEN = {"poly32": "poly's wide path measured -5.3 .. +40.4 % on simavr, -2.4 .. +20.5 % on gpsim (its model, calls "
-                   "and short shifts, misses the output shifts and the registers live across calls)",
-        "poly": "poly measured -3.0 .. +0.8 % on simavr (a degree-1 fit on a random machine): band 3.5 %"}
+OPEN = {"poly32": "poly's wide path: avr -2.24 .. +2.36 % (18 fresh simavr draws, band 2.9 %), pic18 -1.17 .. +2.55 % "
+                   "(7 fresh gpsim draws, band 3.1 %; leave-one-out of the fit 5.8 %: SDCC's byte-loop shifts)",
+        "poly": "poly measured -3.0 .. +0.8 % on simavr (band 3.5 %); -4.0 % seen on a random DAC machine whose "
+                "output clamp is C after the assembly (cost.py does not count it)"}
 
 
 @pytest.mark.parametrize("kind", [pytest.param(k, marks=pytest.mark.xfail(strict=True, reason=f"issue 25 part 4 open: "
@@ -65,7 +66,7 @@ def chips():
             pytest.skip(why)
 
 
-IN_BAND = tuple(k for k in KINDS if k != "poly32")  # poly32: no model within any useful band (see OPEN)
+IN_BAND = KINDS  # every family states a measured band (some still over 3 %: see OPEN)
 
 
 def _within_band(rows):

@@ -13,9 +13,9 @@ int16 intermediates round at about 2^-15 of it).
   0..7-bit shift of each call inlined; SDCC pic16 (no 64-bit type): 16 MULWF in one __asm
   block on a work area, shifts bytewise; the host: four 16 x 16 -> 32 partial products in two
   32-bit halves.
-* Cost: calls of the product routine (steps and output terms) and the shifts by fewer than 32
-  bits, a linear model calibrated on simavr / gpsim (``nnik/calibration/poly32.json``,
-  ``python -m nnik.implementations.poly.calibrate --wide``).
+* Cost: a linear model in the C's structure (calls, shift bits, byte picks, the operands' signs,
+  the outputs' shifts: nnik.implementations.poly.wide_cost), calibrated on simavr / gpsim
+  (``nnik/calibration/poly32.json``, ``python -m nnik.bench.poly32_calibration``).
 """
 
 from __future__ import annotations
@@ -31,7 +31,6 @@ from nnik.implementations.poly import int_model as poly_int
 
 WIDTH = 32
 CALIBRATION = Path(__file__).resolve().parents[2] / "calibration" / "poly32.json"
-FEATURES = ("calls", "short_shifts")
 
 
 def urange(impl) -> list[tuple[int, int]]:
@@ -125,28 +124,20 @@ def model_bytes(impl) -> int:
 
 # ---- cost -------------------------------------------------------------------------------------------
 
-def counts(impl) -> dict:
-    """The cost model's features: calls of NAME_mac, and those shifting by 1..31 bits (the
-    bit-at-a-time path on PIC18)."""
-    shifts = [st.f for st in impl.prog.steps] + [t for o in impl.prog.outs for _, _, t in o.terms]
-    return {"calls": len(shifts), "short_shifts": sum(1 for f in shifts if 0 < f < 32)}
-
-
 def estimate(impl, target: str) -> dict:
+    """Cycles and flash from nnik.implementations.poly.wide_cost's model and its calibration."""
     from nnik.errors import NnikError
+    from nnik.implementations.poly import wide_cost
 
     if not CALIBRATION.exists():
         raise NnikError(f"poly width 32: no calibration ({CALIBRATION.name}); run "
-                        "python -m nnik.implementations.poly.calibrate --wide")
+                        "python -m nnik.bench.poly32_calibration")
     cal = json.loads(CALIBRATION.read_text())
     if target not in cal["targets"]:
         raise NnikError(f"unknown target {target!r} (avr | pic18)")
-    c = counts(impl)
+    c = wide_cost.counts(impl, target)
     t = cal["targets"][target]
-
-    def lin(coef):
-        return float(coef[0] + sum(w * c[f] for w, f in zip(coef[1:], FEATURES)))
     ram = 0 if target == "avr" else 40 + 4 * len(impl.prog.steps)
-    ok = bool(cal.get("validated"))
-    return {"cycles": lin(t["cycles"]), "flash_bytes": int(round(lin(t["flash"]))), "ram_bytes": ram,
-            "validated": ok, "cycles_error_pct": stated_band(cal, target)}
+    return {"cycles": wide_cost.predict(t["cycles"], c, wide_cost.FEATURES[target], c["known"]),
+            "flash_bytes": int(round(wide_cost.predict(t["flash"], c, wide_cost.FLASH_FEATURES[target]))),
+            "ram_bytes": ram, "validated": bool(cal.get("validated")), "cycles_error_pct": stated_band(cal, target)}
