@@ -56,10 +56,10 @@ bench: setup toolchains
 	$(PYTHON) -m nnik.bench.job_speed
 	$(PYTHON) -m nnik.bench.reproducible datasets/corexy_nonlinear.toml datasets/corexy_measured_2000.toml
 	$(PYTHON) -m nnik run datasets/corexy_nonlinear.toml > /dev/null && $(PYTHON) -m nnik.bench.builds build/galvo_cba2012 build/corexy_nonlinear
-	$(PYTHON) -m nnik.estimate sweep
+	$(PYTHON) -m nnik.bench.mlp_cost sweep
 	$(PYTHON) -m nnik.bench.estimator
 	$(PYTHON) -m nnik.bench.costs
-	$(PYTHON) -m nnik.estimate sweep --kernel fast --tanh '' --arch 4 --arch 6 --arch 8 --arch 10 --arch 12 --arch 16
+	$(PYTHON) -m nnik.bench.mlp_cost sweep --kernel fast --tanh '' --arch 4 --arch 6 --arch 8 --arch 10 --arch 12 --arch 16
 	NNIK_HYPOTHESIS_EXAMPLES=300 $(PYTHON) -m pytest -q tests/firmware/gcode/test_gcode_hypothesis.py
 	NNIK_HYPOTHESIS_MACHINES=30 $(PYTHON) -m pytest -q tests/implementations/test_random_machines.py
 	NNIK_HYPOTHESIS_MACHINES=12 $(PYTHON) -m pytest -q tests/machine/test_reference.py

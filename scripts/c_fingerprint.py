@@ -37,8 +37,8 @@ def main() -> dict:
     cal = ROOT / "nnik" / "calibration"
     out: dict = {}
     # the MLP: the estimator's reference models per kernel
-    reference_c_hash = _attr(["nnik.estimate.validity"], "reference_c_hash")
-    stored_hash = _attr(["nnik.estimate.validity"], "stored_hash")
+    reference_c_hash = _attr(["nnik.implementations.mlp.cost.validity", "nnik.estimate.validity"], "reference_c_hash")
+    stored_hash = _attr(["nnik.implementations.mlp.cost.validity", "nnik.estimate.validity"], "stored_hash")
     for prof in ("avr-gcc-Os", "avr-gcc-O2", "pic18-sdcc"):
         data = json.loads((cal / f"{prof}.json").read_text())
         for kkey, kc in sorted(data.get("kernels", {}).items()):

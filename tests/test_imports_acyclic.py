@@ -79,7 +79,7 @@ def find_cycle(graph: dict[str, set[str]]) -> list[str] | None:
 
 def test_nnik_has_no_import_circle():
     graph = import_graph()
-    assert "nnik.implementations.mlp.export" in graph and "nnik.estimate.predict" in graph
+    assert "nnik.implementations.mlp.export" in graph and "nnik.implementations.mlp.cost.predict" in graph
     cycle = find_cycle(graph)
     assert cycle is None, " -> ".join(cycle)
 
@@ -87,7 +87,7 @@ def test_nnik_has_no_import_circle():
 def test_the_graph_sees_lazy_imports_and_the_checker_finds_circles():
     graph = import_graph()
     # a lazy import inside a function is an edge (the estimator's sweep trains through the pipeline)
-    assert "nnik.pipeline" in graph["nnik.estimate.sweep"]
+    assert "nnik.pipeline" in graph["nnik.bench.mlp_cost.sweep"]
     assert "nnik.implementations.mlp.fastc" in graph["nnik.implementations.mlp.export"]
     looped = {k: set(v) for k, v in graph.items()}
     looped["nnik.implementations.mlp.fastc"].add("nnik.implementations.mlp.export")
@@ -96,15 +96,14 @@ def test_the_graph_sees_lazy_imports_and_the_checker_finds_circles():
 
 def test_prediction_does_not_reach_the_pipeline():
     graph = import_graph()
-    seen, todo = set(), ["nnik.estimate.predict", "nnik.estimate"]
+    seen, todo = set(), ["nnik.implementations.mlp.cost.predict", "nnik.implementations.mlp.cost"]
     while todo:
         v = todo.pop()
         if v not in seen:
             seen.add(v)
             todo.extend(graph[v])
     assert "nnik.pipeline" not in seen
-    assert not any(m.startswith("nnik.estimate.") and m.rpartition(".")[2] in ("calibrate", "sweep", "measure")
-                   for m in seen)
+    assert not any(m.startswith("nnik.bench") for m in seen)  # calibrate, sweep, measure: nnik.bench.mlp_cost
 
 
 def test_fastc_does_not_import_export():

@@ -1,8 +1,8 @@
-"""The MLP estimator's full search-space check (CI measures a sample: tests/estimate/
-test_estimate_random.py): random networks `nnik search` proposes, every tanh replacement, int8
+"""The MLP estimator's full search-space check (CI measures a sample: tests/bench/mlp_cost/
+test_search_check.py): random networks `nnik search` proposes, every tanh replacement, int8
 and int16, full / residual / DAC, on avr-gcc -Os and -O2 (simavr) and SDCC pic16 (gpsim; the
 networks SDCC builds in reasonable time), predicted vs measured, each within the band its
-estimate states.  ``--record`` stores the bands (nnik.estimate.search_check.record).
+estimate states.  ``--record`` stores the bands (nnik.bench.mlp_cost.search_check.record).
 
     python3 -m nnik.bench.estimator [-n 60] [--seed 31] [--record]
 """
@@ -14,9 +14,9 @@ import sys
 import tempfile
 from pathlib import Path
 
-from nnik.estimate import search_check as sc
-from nnik.estimate.coverage import measurable
-from nnik.estimate.synthetic import synthetic_model
+from nnik.bench.mlp_cost import search_check as sc
+from nnik.implementations.mlp.cost.coverage import measurable
+from nnik.implementations.mlp.cost.synthetic import synthetic_model
 
 PROFILES = ("avr-gcc-Os", "avr-gcc-O2", "pic18-sdcc")
 

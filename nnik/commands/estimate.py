@@ -28,7 +28,7 @@ def register(sub) -> None:
 
 
 def cmd_estimate(args) -> dict:
-    from nnik.estimate import estimate  # the MLP family's cost model
+    from nnik.implementations.mlp.cost import estimate  # the MLP family's cost model
 
     out = check_model_dir(args.model_dir)
     model = pipeline.TrainedModel.load(out / pipeline.MODEL_FILE)

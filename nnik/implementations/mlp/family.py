@@ -139,7 +139,7 @@ class MlpImpl(Implementation):
         return self.render_c()[f"{self.problem.name}.c"]
 
     def estimate(self, target: str) -> dict:
-        from nnik.estimate import estimate
+        from nnik.implementations.mlp.cost import estimate
 
         e = estimate(self.im, target)
         return {"cycles": float(e["cycles"]), "flash_bytes": int(e["flash_bytes"]), "ram_bytes": int(e["ram_bytes"]),

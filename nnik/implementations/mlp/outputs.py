@@ -295,7 +295,7 @@ def _target_row(res: dict, truth_in: np.ndarray | None, out: np.ndarray, inside:
 
 def estimate_row(im, target: str, measured: dict | None = None) -> dict:
     """The static estimator's prediction, and its % difference from a measurement if given."""
-    from nnik.estimate import estimate
+    from nnik.implementations.mlp.cost import estimate
 
     e = estimate(im, target)
     row = {k: e[k] for k in ("cycles", "flash_bytes", "ram_bytes", "profile", "validated", "cycles_error_pct") if k in e}

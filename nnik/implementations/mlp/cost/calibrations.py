@@ -8,7 +8,7 @@ from pathlib import Path
 
 from nnik.errors import NnikError
 
-PACKAGE_DIR = Path(__file__).resolve().parent.parent
+PACKAGE_DIR = Path(__file__).resolve().parents[3]  # nnik/ (this file: nnik/implementations/mlp/cost/)
 CAL_DIR = PACKAGE_DIR / "calibration"
 REPO_ROOT = PACKAGE_DIR.parent
 CALIBRATION_FORMAT = 1
@@ -45,7 +45,7 @@ def load_calibration(profile: str) -> dict:
     """The calibration data of a profile (raises NnikError if it is missing)."""
     path = cal_path(profile)
     if not path.is_file():
-        raise NnikError(f"no calibration for profile {profile!r} (run `python3 -m nnik.estimate calibrate "
+        raise NnikError(f"no calibration for profile {profile!r} (run `python3 -m nnik.bench.mlp_cost calibrate "
                         f"--target {_profile_target(profile)}`)", str(path))
     try:
         data = _load_cal_cached(str(path), path.stat().st_mtime)

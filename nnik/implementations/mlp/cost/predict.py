@@ -7,17 +7,17 @@ from pathlib import Path
 import numpy as np
 
 from nnik.errors import NnikError
-from nnik.estimate.fast_features import fast_path
-from nnik.estimate.features import (cycle_features, flash_features, is_far, predict_frame, ram_features,
-                                    size_features)
-from nnik.estimate.kernels import kernel_key, model_kernel
-from nnik.estimate.calibrations import (CLOCKS_PER_CYCLE, GOAL_CYCLES_PCT, GOAL_FLASH_PCT, load_calibration,
-                                    resolve_profile)
-from nnik.estimate.shifts import shift_offset
-from nnik.estimate.span import outside_span, structure_row
-from nnik.estimate.structure import structure
-from nnik.estimate.trace import typical_inputs
-from nnik.estimate.validity import reference_c_hash, stored_hash
+from nnik.implementations.mlp.cost.fast_features import fast_path
+from nnik.implementations.mlp.cost.features import (cycle_features, flash_features, is_far, predict_frame, ram_features,
+                                                    size_features)
+from nnik.implementations.mlp.cost.kernels import kernel_key, model_kernel
+from nnik.implementations.mlp.cost.calibrations import (CLOCKS_PER_CYCLE, GOAL_CYCLES_PCT, GOAL_FLASH_PCT,
+                                                        load_calibration, resolve_profile)
+from nnik.implementations.mlp.cost.shifts import shift_offset
+from nnik.implementations.mlp.cost.span import outside_span, structure_row
+from nnik.implementations.mlp.cost.structure import structure
+from nnik.implementations.mlp.cost.trace import typical_inputs
+from nnik.implementations.mlp.cost.validity import reference_c_hash, stored_hash
 
 
 BREAKDOWN_GROUPS = (
@@ -122,7 +122,7 @@ def estimate(im, target: str, profile: str | None = None, clock_hz: int = 16_000
     if stored_hash(cal, kkey) != reference_c_hash(kern):
         validated = False
         notes.append("the emitted C changed since this calibration (the C of its reference models differs): re-run "
-                     f"`python3 -m nnik.estimate calibrate --target {cal['target']}`")
+                     f"`python3 -m nnik.bench.mlp_cost calibrate --target {cal['target']}`")
     if s["layers"] > 2:
         validated = False
         notes.append("more than two hidden layers: extrapolated (calibrated on 1-2)")
@@ -149,7 +149,7 @@ def estimate(im, target: str, profile: str | None = None, clock_hz: int = 16_000
     vl = val.get("by_layers", {}).get(str(s["layers"])) if isinstance(val, dict) else None
     if vl is None:
         validated = False
-        notes.append(f"no recorded sweep for {s['layers']}-layer networks (python3 -m nnik.estimate sweep --record"
+        notes.append(f"no recorded sweep for {s['layers']}-layer networks (python3 -m nnik.bench.mlp_cost sweep --record"
                      + ("" if kern in (None, "portable") else f" --kernel {kern}") + ")")
     elif vl["max_abs_cycles_err_pct"] > GOAL_CYCLES_PCT or vl["max_abs_flash_err_pct"] > GOAL_FLASH_PCT:
         validated = False
@@ -184,7 +184,7 @@ def stated_cycles_error_pct(cal: dict, kkey: str, sweep_by_layers: dict | None) 
     """What a validated estimate states about its cycle error, in %: the measured band, i.e. the
     larger of the recorded sweep's worst for networks with as many layers and, for the fast
     kernel, the search-space check's band (random architectures the search can propose, residual
-    ones too; see nnik.estimate.search_check).  None when nothing was measured."""
+    ones too; see nnik.bench.mlp_cost.search_check).  None when nothing was measured."""
     bounds = []
     if sweep_by_layers:
         bounds.append(float(sweep_by_layers["max_abs_cycles_err_pct"]))

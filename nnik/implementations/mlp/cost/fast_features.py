@@ -1,5 +1,5 @@
-"""Features of the "fast" kernel (nnik.implementations.mlp.kernel, nnik.implementations.mlp.fastc): unrolled, weights as constants in
-the code, prefixed by the code path ("asm" or "c") each target takes."""
+"""Features of the "fast" kernel (nnik.implementations.mlp.kernel, nnik.implementations.mlp.fastc): unrolled,
+weights as constants in the code, prefixed by the code path ("asm" or "c") each target takes."""
 
 from __future__ import annotations
 
@@ -10,8 +10,8 @@ from nnik.implementations.mlp import fastc
 from nnik.implementations.mlp import fastc_avr
 
 from nnik.implementations.mlp import fastc_p18
-from nnik.estimate.structure import structure
-from nnik.estimate.trace import dac_hits, hidden_trace, tanh_class_index, tanh_classes
+from nnik.implementations.mlp.cost.structure import structure
+from nnik.implementations.mlp.cost.trace import dac_hits, hidden_trace, tanh_class_index, tanh_classes
 
 ASM_BODIES = {"avr": fastc_avr, "pic18": fastc_p18}
 

@@ -1,9 +1,9 @@
-"""The estimator on the networks `nnik search` proposes (nnik.estimate.search_check): random
+"""The estimator on the networks `nnik search` proposes (nnik.bench.mlp_cost.search_check): random
 architectures of its MLP space (one or two hidden layers of its widths, full, residual and
 residual with a DAC clamp, int8 and int16 weights, the fast kernel, every tanh replacement).
 
 * Without a simulator: every such network is inside what the calibration measured (its counts
-  are in the span of the calibration networks', nnik.estimate.span), so its estimate is
+  are in the span of the calibration networks', nnik.implementations.mlp.cost.span), so its estimate is
   validated and states the measured band -- on both AVR profiles, and on PIC18 wherever SDCC
   builds the network in reasonable time (the assembly body: one layer, the kernel's own tanh;
   the C path of small networks).  Networks outside that are not validated and state no band.
@@ -20,12 +20,12 @@ import sys
 
 import pytest
 
-from nnik.estimate import search_check as sc
-from nnik.estimate.calibrations import GOAL_CYCLES_PCT, load_calibration
-from nnik.estimate.coverage import measurable
-from nnik.estimate.fast_features import fast_path
-from nnik.estimate.predict import estimate, stated_cycles_error_pct
-from nnik.estimate.synthetic import synthetic_model
+from nnik.bench.mlp_cost import search_check as sc
+from nnik.implementations.mlp.cost.calibrations import GOAL_CYCLES_PCT, load_calibration
+from nnik.implementations.mlp.cost.coverage import measurable
+from nnik.implementations.mlp.cost.fast_features import fast_path
+from nnik.implementations.mlp.cost.predict import estimate, stated_cycles_error_pct
+from nnik.implementations.mlp.cost.synthetic import synthetic_model
 
 SEED = 20270101  # not the recorded check's seed: these draws played no part in the stated bound
 DRAWS = int(os.environ.get("NNIK_ESTIMATE_DRAWS", "6"))

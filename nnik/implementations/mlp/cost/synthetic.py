@@ -12,7 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from nnik.errors import NnikError
-from nnik.estimate.calibrations import REPO_ROOT
+from nnik.implementations.mlp.cost.calibrations import REPO_ROOT
 
 DATASETS = REPO_ROOT / "datasets"
 
@@ -42,8 +42,8 @@ class CalSpec:
 # kernel's own table) spelt "" as CalSpec does
 SEARCH_TANHS = ("", "lerp32", "lerp64", "lerp_mr", "lerp_mr4", "minimax3_x11", "minimax2_x22", "paper_lsq5")
 
-# picked by nnik.estimate.coverage (python3 -m nnik.estimate.coverage): they widen the span of
-# the fast kernel's calibration to the counts of the networks the search proposes
+# picked by coverage (python3 -m nnik.implementations.mlp.cost.coverage): they widen the span of the
+# fast kernel's calibration to the counts of the networks the search proposes
 COVERAGE_SPECS: tuple[CalSpec, ...] = (
     CalSpec('galvo_small', (3, 2), tanh='minimax2_x22', weight_bits=16, seed=5000, gain=0.3, out_scale=1, n_vec=12),
     CalSpec('corexy', (17,), tanh='minimax2_x22', weight_bits=8, seed=5001, gain=0.3, out_scale=1, n_vec=12),
@@ -106,7 +106,7 @@ JUDGED_SIZES = range(4, 17)
 def calibration_specs(kernel: str | None = None, coverage: bool = True) -> list[CalSpec]:
     """The calibration set: hidden sizes outside 4-16 only (those are what the sweep judges).
     For the fast kernel the structural networks use its own tanh tables (tanh=""), and
-    COVERAGE_SPECS (nnik.estimate.coverage) span the counts of the networks the search proposes."""
+    COVERAGE_SPECS (nnik.implementations.mlp.cost.coverage) span the counts of the networks the search proposes."""
     from nnik.implementations.mlp import tanh as activations
 
     base = "lerp_mr4" if "lerp_mr4" in activations.VARIANTS else activations.DEFAULT_VARIANT

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from nnik.estimate.fast_features import fast_counts_prefixed
+from nnik.implementations.mlp.cost.fast_features import fast_counts_prefixed
 
 SPAN_TOL = 1e-6
 

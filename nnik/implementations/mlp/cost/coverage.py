@@ -1,29 +1,29 @@
 """Coverage of the fast kernel's calibration, a developer tool (no simulator).
 
 The calibration networks must span every combination of per-call counts the search can
-propose (nnik.estimate.span): code paths, shift regimes of the tanh input, output and input
+propose (nnik.implementations.mlp.cost.span): code paths, shift regimes of the tanh input, output and input
 stages, int8 and int16 weights, residual bases, DAC clamps, tanh replacements.
 ``coverage_specs`` picks them from seeded pools of synthetic networks (widths outside the
 judged 4-16, tanh replacements, formats moved by the weight gain and the output scale): a pool
 network joins when it widens the span on a target where it can be measured.  The result is
-fixed: ``synthetic.COVERAGE_SPECS`` holds the list, and tests/estimate check that random search
+fixed: ``synthetic.COVERAGE_SPECS`` holds the list, and tests/bench/mlp_cost check that random search
 architectures fall inside the span of the calibration set.
 
-    python3 -m nnik.estimate.coverage          # print the picked specs
+    python3 -m nnik.implementations.mlp.cost.coverage          # print the picked specs
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from nnik.estimate.fast_features import fast_path
-from nnik.estimate.span import structure_row
-from nnik.estimate.synthetic import SEARCH_TANHS, CalSpec, synthetic_model
+from nnik.implementations.mlp.cost.fast_features import fast_path
+from nnik.implementations.mlp.cost.span import structure_row
+from nnik.implementations.mlp.cost.synthetic import SEARCH_TANHS, CalSpec, synthetic_model
 
 TARGETS = ("avr", "pic18")
 POOL_SEEDS = (4242,)
 # SDCC compiles the unrolled C of a fast network slowly: on PIC18 its C path is calibrated on
-# hidden sizes up to this only (nnik.estimate.measure skips larger ones)
+# hidden sizes up to this only (nnik.bench.mlp_cost.measure skips larger ones)
 PIC18_C_MAX_HIDDEN = 3
 
 
@@ -88,7 +88,7 @@ def coverage_specs(base: list[CalSpec], seed: int, n_pool: int = 700) -> list[Ca
 if __name__ == "__main__":
     import sys
 
-    from nnik.estimate.synthetic import calibration_specs
+    from nnik.implementations.mlp.cost.synthetic import calibration_specs
 
     # each pool gives a set that spans on its own (more pools: every direction covered more than once)
     for seed in [int(a) for a in sys.argv[1:]] or POOL_SEEDS:

@@ -1,5 +1,5 @@
 """The validation sweep: trained networks of the judged sizes, predicted vs measured on the
-simulators (``python3 -m nnik.estimate sweep``; uses the pipeline to train them)."""
+simulators (``python3 -m nnik.bench.mlp_cost sweep``; uses the pipeline to train them)."""
 
 from __future__ import annotations
 
@@ -11,12 +11,12 @@ from pathlib import Path
 
 import numpy as np
 
-from nnik.estimate.kernels import kernel_key, model_kernel, write_c
-from nnik.estimate.measure import run_profile
-from nnik.estimate.predict import estimate
-from nnik.estimate.calibrations import (BUILTIN_PROFILES, DEFAULT_KERNEL_KEY, REPO_ROOT, TARGETS, cal_path,
-                                    forget_loaded, profiles)
-from nnik.estimate.synthetic import DATASETS, in_domain_vectors
+from nnik.implementations.mlp.cost.kernels import kernel_key, model_kernel, write_c
+from nnik.bench.mlp_cost.measure import run_profile
+from nnik.implementations.mlp.cost.predict import estimate
+from nnik.implementations.mlp.cost.calibrations import (BUILTIN_PROFILES, DEFAULT_KERNEL_KEY, REPO_ROOT, TARGETS,
+                                                        cal_path, forget_loaded, profiles)
+from nnik.implementations.mlp.cost.synthetic import DATASETS, in_domain_vectors
 
 SWEEP_DIR = REPO_ROOT / "build" / "estimator_sweep"
 SWEEP_ARCHS: tuple[tuple[int, ...], ...] = ((4,), (6,), (8,), (10,), (12,), (16,), (4, 4), (6, 6), (8, 8),
@@ -134,7 +134,7 @@ def _record_validation(rows: Sequence[dict]) -> None:
             val[kkey] = {**s, "archs": sorted({r["arch"] for r in rk if r["profile"] == prof}),
                          "tanh": sorted({r["tanh"] for r in rk if r["profile"] == prof}),
                          "date": datetime.datetime.now(datetime.UTC).strftime("%Y-%m-%dT%H:%M:%SZ"),
-                         "command": "python3 -m nnik.estimate sweep --record"
+                         "command": "python3 -m nnik.bench.mlp_cost sweep --record"
                                     + ("" if kkey in (DEFAULT_KERNEL_KEY, "portable") else f" --kernel {kkey}")}
             cal["validation"] = val
             path.write_text(json.dumps(cal, indent=1) + "\n")

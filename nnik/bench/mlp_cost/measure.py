@@ -11,11 +11,11 @@ from pathlib import Path
 import numpy as np
 
 from nnik.errors import NnikError
-from nnik.estimate.coverage import measurable
-from nnik.estimate.kernels import kernel_key, render_c, write_c
-from nnik.estimate.calibrations import BUILTIN_PROFILES
-from nnik.estimate.shifts import MAX_SHIFT, SHIFT_GROUPS, SHIFTS, shift_bench_c
-from nnik.estimate.synthetic import CalSpec, calibration_specs, in_domain_vectors, synthetic_model
+from nnik.implementations.mlp.cost.coverage import measurable
+from nnik.implementations.mlp.cost.kernels import kernel_key, render_c, write_c
+from nnik.implementations.mlp.cost.calibrations import BUILTIN_PROFILES
+from nnik.implementations.mlp.cost.shifts import MAX_SHIFT, SHIFT_GROUPS, SHIFTS, shift_bench_c
+from nnik.implementations.mlp.cost.synthetic import CalSpec, calibration_specs, in_domain_vectors, synthetic_model
 
 
 @functools.cache
@@ -105,7 +105,7 @@ def measure_shift_tables(profile: str, workdir: Path) -> dict:
 def measurement_key(profile: str, csrc: Path, vec: np.ndarray) -> str:
     """What a measurement depends on: the profile, the model's C (with the runtime headers and
     harnesses, which the kernel's reference hash covers) and the input vectors."""
-    from nnik.estimate.validity import reference_c_hash
+    from nnik.implementations.mlp.cost.validity import reference_c_hash
 
     h = hashlib.sha256()
     for part in (profile.encode(), reference_c_hash("fast").encode(), reference_c_hash(None).encode(),

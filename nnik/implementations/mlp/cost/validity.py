@@ -7,7 +7,7 @@ residual and DAC outputs, int8 weights, looped and sparse fast layers) together 
 headers the model's C includes, the simulator harnesses and the shift microbenchmark.  The calibration stores it per
 kernel; an estimate is validated only while the stored and the recomputed hashes agree.  A
 refactor that emits the same C keeps the calibration; any change in the emitted C needs
-``python3 -m nnik.estimate calibrate`` again.
+``python3 -m nnik.bench.mlp_cost calibrate`` again.
 """
 
 from __future__ import annotations
@@ -17,11 +17,13 @@ import functools
 import hashlib
 import re
 
-from nnik.estimate.calibrations import REPO_ROOT
-from nnik.estimate.kernels import render_c
-from nnik.estimate.shifts import SHIFT_GROUPS, shift_bench_c
-from nnik.estimate.synthetic import CalSpec, synthetic_model
+from nnik.implementations.mlp.cost.calibrations import REPO_ROOT
+from nnik.implementations.mlp.cost.kernels import render_c
+from nnik.implementations.mlp.cost.shifts import SHIFT_GROUPS, shift_bench_c
+from nnik.implementations.mlp.cost.synthetic import CalSpec, synthetic_model
 
+# the source line the reference models' C carries: part of the hashed C, so it keeps the name the
+# calibrations were measured under
 REFERENCE_SOURCE = "nnik.estimate reference model"
 # what a measured program contains besides the model: the simulator harnesses and the size stub
 # (relative to the repository root), and the runtime headers the model's C includes

@@ -1,4 +1,4 @@
-"""The static cycle/flash/RAM estimator (nnik.estimate).
+"""The static cycle/flash/RAM estimator (nnik.implementations.mlp.cost).
 
 Most tests need no simulator: the calibration is package data and the networks are built from
 random weights with the real quantiser. One test runs a held-out network on simavr.
@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from nnik.errors import NnikError
-from nnik.estimate import calibrations, kernels, predict, synthetic, trace, validity
+from nnik.implementations.mlp.cost import calibrations, kernels, predict, synthetic, trace, validity
 
 BUILTIN = ("avr-gcc-Os", "avr-gcc-O2", "pic18-sdcc")
 
@@ -38,7 +38,7 @@ def test_calibration_files_load_and_cover_every_profile():
         assert cal["profile"] == p and cal["target"] == calibrations.BUILTIN_PROFILES[p]["target"]
         for key in ("compiler", "flags", "date", "command", "validity", "shift_tables", "kernels"):
             assert key in cal, (p, key)
-        assert cal["command"].startswith("python3 -m nnik.estimate calibrate --target ")
+        assert cal["command"].startswith("python3 -m nnik.bench.mlp_cost calibrate --target ")
         assert cal["validated"] is True
         for kkey, kc in cal["kernels"].items():
             for what in ("cycles", "flash", "ram"):
@@ -173,7 +173,7 @@ def test_calibration_matches_the_current_generator():
     """The stored calibration was measured on the C the generator emits today: the C of the
     reference models (plus runtime headers, harnesses, shift benchmark) hashes as it did then.
     A refactor that emits the same C passes; a change in the C needs
-    `python3 -m nnik.estimate calibrate --target avr|pic18` (and a sweep --record)."""
+    `python3 -m nnik.bench.mlp_cost calibrate --target avr|pic18` (and a sweep --record)."""
     for kernel in ("portable", "fast"):
         for profile in BUILTIN:
             cal = json.loads((calibrations.CAL_DIR / f"{profile}.json").read_text())

@@ -4,10 +4,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from nnik.estimate.fast_features import fast_path
-from nnik.estimate.features import cycle_features, flash_features, frame_features, ram_features, size_features
-from nnik.estimate.shifts import shift_offset
-from nnik.estimate.span import span_rows
+from nnik.implementations.mlp.cost.fast_features import fast_path
+from nnik.implementations.mlp.cost.features import (cycle_features, flash_features, frame_features, ram_features,
+                                                    size_features)
+from nnik.implementations.mlp.cost.shifts import shift_offset
+from nnik.implementations.mlp.cost.span import span_rows
 
 
 def lstsq(rows: list[dict], y: np.ndarray, offset: np.ndarray, weights: np.ndarray | None = None) -> tuple[dict, dict]:

@@ -1,5 +1,5 @@
 """Calibration, a developer tool: microbenchmarks on the simulators, fitted into
-nnik/calibration/<profile>.json (``python3 -m nnik.estimate calibrate``)."""
+nnik/calibration/<profile>.json (``python3 -m nnik.bench.mlp_cost calibrate``)."""
 
 from __future__ import annotations
 
@@ -11,13 +11,13 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from nnik.errors import NnikError
-from nnik.estimate.fit import fit_measurements
-from nnik.estimate.kernels import kernel_key, kernel_options
-from nnik.estimate.measure import measure_kernel, measure_shift_tables
-from nnik.estimate.calibrations import (BUILTIN_PROFILES, CAL_DIR, CALIBRATION_FORMAT, DEFAULT_PROFILE, REPO_ROOT,
-                                    cal_path, forget_loaded, resolve_profile)
-from nnik.estimate.trace import TYPICAL_N, TYPICAL_SEED
-from nnik.estimate.validity import reference_c_hash, stored_hash
+from nnik.implementations.mlp.cost.fit import fit_measurements
+from nnik.implementations.mlp.cost.kernels import kernel_key, kernel_options
+from nnik.bench.mlp_cost.measure import measure_kernel, measure_shift_tables
+from nnik.implementations.mlp.cost.calibrations import (BUILTIN_PROFILES, CAL_DIR, CALIBRATION_FORMAT, DEFAULT_PROFILE,
+                                                        REPO_ROOT, cal_path, forget_loaded, resolve_profile)
+from nnik.implementations.mlp.cost.trace import TYPICAL_N, TYPICAL_SEED
+from nnik.implementations.mlp.cost.validity import reference_c_hash, stored_hash
 
 CAL_WORK_DIR = REPO_ROOT / "build" / "estimator_calibration"
 
@@ -92,11 +92,11 @@ def calibrate(target: str, profile: str | None = None, *, kernels: Sequence[str 
         "flags": flags,
         "validated": True,
         "date": datetime.datetime.now(datetime.UTC).strftime("%Y-%m-%dT%H:%M:%SZ"),
-        "command": f"python3 -m nnik.estimate calibrate --target {p['target']}" + (
+        "command": f"python3 -m nnik.bench.mlp_cost calibrate --target {p['target']}" + (
             f" --profile {prof}" if prof != DEFAULT_PROFILE[p["target"]] else ""),
         "seconds": round(seconds, 1) if not refit else prev.get("seconds"),
         "validity": "an estimate is validated while kernels/*/reference_c_hash equals the hash of the C emitted "
-                    "today for the reference models (nnik.estimate.validity)",
+                    "today for the reference models (nnik.implementations.mlp.cost.validity)",
         "typical_inputs": f"{TYPICAL_N} uniform points of the trained domain (seed {TYPICAL_SEED})",
         "shift_tables": tables,
         "kernels": out_kernels,

@@ -1,4 +1,4 @@
-"""Command line: python3 -m nnik.estimate {calibrate,sweep,search-check,model}."""
+"""Command line: python3 -m nnik.bench.mlp_cost {calibrate,sweep,search-check,model}."""
 
 from __future__ import annotations
 
@@ -8,14 +8,14 @@ import sys
 from pathlib import Path
 
 from nnik.errors import NnikError
-from nnik.estimate.calibrate import calibrate
-from nnik.estimate.predict import estimate, format_estimate, load_integer_model
-from nnik.estimate.calibrations import BUILTIN_PROFILES, TARGETS, profiles, resolve_profile
-from nnik.estimate.sweep import SWEEP_ARCHS, SWEEP_TANH, format_sweep, sweep
+from nnik.bench.mlp_cost.calibrate import calibrate
+from nnik.implementations.mlp.cost.predict import estimate, format_estimate, load_integer_model
+from nnik.implementations.mlp.cost.calibrations import BUILTIN_PROFILES, TARGETS, profiles, resolve_profile
+from nnik.bench.mlp_cost.sweep import SWEEP_ARCHS, SWEEP_TANH, format_sweep, sweep
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(prog="python3 -m nnik.estimate", description="static cycle/flash/RAM estimator")
+    ap = argparse.ArgumentParser(prog="python3 -m nnik.bench.mlp_cost", description="static cycle/flash/RAM estimator")
     sub = ap.add_subparsers(dest="cmd", required=True)
     c = sub.add_parser("calibrate", help="run the microbenchmarks on the simulators, write nnik/calibration/*.json")
     c.add_argument("--target", choices=TARGETS, action="append", help="default: both")
@@ -60,7 +60,7 @@ def main(argv: list[str] | None = None) -> int:
                          tanhs=tuple(args.tanh) if args.tanh else SWEEP_TANH, profiles_=args.profile)
             print(format_sweep(rows))
         elif args.cmd == "search-check":
-            from nnik.estimate import search_check as sc
+            from nnik.bench.mlp_cost import search_check as sc
 
             specs = sc.draw_specs(args.n, args.seed, tuple(args.depth or (1, 2)))
             rows = sc.check(specs, args.profile or ["avr-gcc-Os", "pic18-sdcc"])

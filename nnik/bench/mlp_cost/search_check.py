@@ -5,7 +5,7 @@ fast kernel it always uses), predicted against simavr and gpsim.
 The calibration and the recorded sweep are judged on full networks of the galvo; the search also
 prices residual networks with an affine base. What the estimator states about its own cycle error
 (``estimate()["cycles_error_pct"]``) is the larger of the recorded sweep's and this check's,
-recorded per profile in the calibration file (``python3 -m nnik.estimate search-check --record``)
+recorded per profile in the calibration file (``python3 -m nnik.bench.mlp_cost search-check --record``)
 with a margin for draws the check has not seen."""
 
 from __future__ import annotations
@@ -18,9 +18,9 @@ from pathlib import Path
 
 import numpy as np
 
-from nnik.estimate.calibrations import BUILTIN_PROFILES, REPO_ROOT, cal_path, forget_loaded
-from nnik.estimate.synthetic import SEARCH_TANHS as TANHS
-from nnik.estimate.synthetic import CalSpec
+from nnik.implementations.mlp.cost.calibrations import BUILTIN_PROFILES, REPO_ROOT, cal_path, forget_loaded
+from nnik.implementations.mlp.cost.synthetic import SEARCH_TANHS as TANHS
+from nnik.implementations.mlp.cost.synthetic import CalSpec
 
 CHECK_DIR = REPO_ROOT / "build" / "estimator_search_check"
 WIDTHS = (3, 4, 5, 6, 8, 10, 12)  # nnik.search.space.MLP_WIDTHS (not imported: estimate stays below search)
@@ -50,10 +50,10 @@ def check(specs: list[CalSpec], profiles: list[str], n_vec: int = 60, workdir: P
     """Estimate and measure every spec on every profile: rows with the cycle error in % and the
     error the estimate states about itself (``only_validated``: an estimate that states none is
     not measured; its row has no cycles_meas)."""
-    from nnik.estimate.kernels import write_c
-    from nnik.estimate.measure import run_profile
-    from nnik.estimate.predict import estimate
-    from nnik.estimate.synthetic import in_domain_vectors, synthetic_model
+    from nnik.implementations.mlp.cost.kernels import write_c
+    from nnik.bench.mlp_cost.measure import run_profile
+    from nnik.implementations.mlp.cost.predict import estimate
+    from nnik.implementations.mlp.cost.synthetic import in_domain_vectors, synthetic_model
 
     rows = []
     for sp in specs:
@@ -101,7 +101,7 @@ def record(rows: list[dict], seed: int) -> dict:
              "int8_networks": sum(":w8:" in r["spec"] for r in rr),
              "two_layer_networks": sum(r["spec"].split(":")[1].count("-") == 3 for r in rr),
              "date": datetime.datetime.now(datetime.UTC).strftime("%Y-%m-%dT%H:%M:%SZ"),
-             "command": "python3 -m nnik.estimate search-check --record"}
+             "command": "python3 -m nnik.bench.mlp_cost search-check --record"}
         path = cal_path(prof)
         cal = json.loads(path.read_text())
         cal.setdefault("search_check", {})[KERNEL] = s

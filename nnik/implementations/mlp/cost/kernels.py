@@ -8,7 +8,7 @@ from nnik.implementations.mlp import kernel as kmod
 from nnik.emit.templating import write_sources
 from nnik.implementations.mlp.export import render_model_c
 from nnik.emit.templating import RUNTIME
-from nnik.estimate.calibrations import DEFAULT_KERNEL_KEY
+from nnik.implementations.mlp.cost.calibrations import DEFAULT_KERNEL_KEY
 
 
 def kernel_options() -> list[str]:
@@ -31,7 +31,7 @@ def model_kernel(im, kernel: str | None = None) -> str | None:
     return k if k is not None else default_kernel()
 
 
-def render_c(im, source: str = "nnik.estimate", kernel: str | None = None) -> dict[str, str]:
+def render_c(im, source: str = "nnik.implementations.mlp.cost", kernel: str | None = None) -> dict[str, str]:
     """{filename: text} of the model's C (kernel None: the model's own)."""
     return render_model_c(im, source, kernel=kernel)
 

@@ -7,9 +7,9 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from nnik.estimate.fast_features import fast_cycle_features, fast_size_features
-from nnik.estimate.structure import structure
-from nnik.estimate.trace import dac_hits, hidden_trace, sign_counts, tanh_class_index, tanh_classes
+from nnik.implementations.mlp.cost.fast_features import fast_cycle_features, fast_size_features
+from nnik.implementations.mlp.cost.structure import structure
+from nnik.implementations.mlp.cost.trace import dac_hits, hidden_trace, sign_counts, tanh_class_index, tanh_classes
 
 
 def cycle_features(im, in_um: np.ndarray, far: bool = False, target: str | None = None) -> dict[str, np.ndarray]:
