@@ -3,8 +3,8 @@
 `nnik job` and `nnik export --arduino` used to ask OUTDIR again at every step (the trained
 scenario, the pick's state, the pick refitted for the IK, again for the library's golden vectors,
 again for its label). ModelDir reads each of them once, when first asked; whoever holds the
-object never opens the model directory again (the MLP fallback's label, for the library's own tests only, reads
-metrics.json when asked).
+object never opens the model directory again (the MLP fallback's label, for the library's own
+tests only, reads metrics.json when asked).
 """
 
 from __future__ import annotations

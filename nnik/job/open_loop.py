@@ -105,7 +105,8 @@ class OpenLoopJob(JobKind):
 
 def run_job(outdir: Path, job_path: Path, seg_um: int | None = None, use_chip: bool | None = None,
             shaper: str | None = None, precompensate: bool = False, opts: JobOptions | None = None,
-            check: bool = False, mcu: str = "atmega328p", scenario=None, warn=None, model: ModelDir | None = None) -> dict:
+            check: bool = False, mcu: str = "atmega328p", scenario=None, warn=None,
+            model: ModelDir | None = None) -> dict:
     """An open-loop job on OUTDIR (read once here, or given as model): see OpenLoopJob and
     JobRequest. scenario: the machine's [motion], [dynamics] and [tool] (default: the model's, as
     it was trained; `nnik job SCENARIO.toml` gives the TOML's)."""

@@ -97,6 +97,7 @@ def _expected(outdir: Path, job: Path, shaper: str | None = None, precompensate:
     cfg, lines = prep.cfg, [sendable(ln).decode("latin-1") for ln in prep.lines]
     dyn = None
     if scn.dynamics:
+        (outdir / "job").mkdir(exist_ok=True)
         cfg, lines, dyn, _ = job_dynamics(scn, cfg, lines, ik, asked, precompensate, str(job), outdir / "job", job.stem)
     plan = interpret(lines, cfg)
     assert set(plan.replies) == {"ok"}
@@ -120,6 +121,7 @@ def _expected(outdir: Path, job: Path, shaper: str | None = None, precompensate:
     ("galvo_run", "circle", {}),
     ("corexy_run", "star", {}),
     ("corexy_run", "l_path", {"shaper": "zvd"}),
+    ("corexy_run", "l_path", {"shaper": "auto"}),  # auto's pick is a shaper the parsed machine did not have
     ("corexy_run", "l_path", {"precompensate": True}),
 ])
 def test_the_stages_write_the_firmware_models_figures(request, run, job, kw):
