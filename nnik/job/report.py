@@ -17,11 +17,11 @@ from nnik.job.measure import MeasuredJob
 def picture(measured: MeasuredJob, out: Path) -> str:
     """OUTDIR/job/JOB.png; its path."""
     shaped = measured.sampled.shaped
-    cfg, res, stem = shaped.cfg, measured.figures, shaped.parsed.request.job
-    title = (f"{res['scenario']}: {stem.name}, {res['motion']['job_s']:.2f} s ({cfg.sample_hz} Hz samples, shaper "
+    cfg, res, job = shaped.cfg, measured.figures, shaped.parsed.request.job
+    title = (f"{res['scenario']}: {job.name}, {res['motion']['job_s']:.2f} s ({cfg.sample_hz} Hz samples, shaper "
              f"{cfg.shaper}); contour error max "
              f"{res['contour_um']['max']:.1f} µm, RMS {res['contour_um']['rms']:.1f} µm")
-    return str(job_png(out / f"{stem.stem}.png", title, shaped.plan, cfg, measured.plot, measured.sampled.segments))
+    return str(job_png(out / f"{job.stem}.png", title, shaped.plan, cfg, measured.plot, measured.sampled.segments))
 
 
 def report(measured: MeasuredJob, chip: dict, png: str, out: Path) -> dict:
