@@ -3,7 +3,7 @@ PYTHON ?= python3
 SCENARIO ?= datasets/galvo_cba2012.toml
 STAMP := .setup.stamp
 
-.PHONY: setup toolchains demo test bench clean
+.PHONY: setup toolchains demo test house bench clean
 
 # torch first, pinned to the local CPU build: a bare `torch` requirement would pull CUDA.
 $(STAMP): pyproject.toml
@@ -24,6 +24,14 @@ demo: setup toolchains
 
 test: setup toolchains
 	bash scripts/run_tests.sh
+
+# the house rules (CI runs the same tests in `make test`): nnik/ flows one way by pyproject.toml's
+# import contracts, every package on one layer; no Python file over 500 lines; no two firmware C
+# files that call each other (scripts/c_calls.py prints their call graph)
+house: setup
+	lint-imports
+	$(PYTHON) scripts/c_calls.py
+	$(PYTHON) -m pytest -q tests/test_house.py tests/test_imports_acyclic.py tests/firmware/test_c_calls.py
 
 # per-target tables (MLP kernels, float math.h IK, LUT, seed 000 Table 1), then the estimator's
 # validation sweep (predicted vs measured cycles and flash on 11 architectures x 2 tanh); the measured

@@ -1,4 +1,4 @@
-"""Adding a family is one folder and one registry line (README: "Adding a family"). A toy family
+"""Adding a family is one folder and one registry line (docs/families.md: "Adding a family"). A toy family
 (tests/implementations/affine/: a least-squares plane per output) is registered with the loader
 REGISTRY uses and goes through what every family goes through: the ladder fit and its accuracy
 on the check set, the family's best for a target, and the host verification of its C (its int64

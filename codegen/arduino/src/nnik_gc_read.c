@@ -11,7 +11,6 @@
 
 enum { RD_WORDS, RD_PAREN, RD_SEMI, RD_SUM, RD_PERCENT, RD_SUM_END };
 
-void nnik_gc_read_reset(nnik_gc_t *g);
 void nnik_gc_read_reset(nnik_gc_t *g)
 {
     g->len = 0;

@@ -1,5 +1,6 @@
 /*
- * nnik_gcode.c - see nnik_gcode.h.  The interpreter and the motion it hands to the planner;
+ * nnik_gcode.c - see nnik_gcode.h.  The interpreter and the motion it hands to the planner (the
+ * engine's start: nnik_gc_init.c; the tool's word: nnik_gc_tool.c);
  * nnik/firmware/gcode/interpreter.py repeats it bit for bit.  Positions are machine micrometres
  * less the work origin (mp: X, Y and the tool's Z); an absolute target is the value plus the
  * active work offset (G54..G59 by G10), the G92 offset and for Z the tool length offset; G53
@@ -8,14 +9,12 @@
  */
 #include "nnik_gc_block.h"
 #include "nnik_gc_geom.h"
+#include "nnik_gc_tool.h"
 #include "nnik_gcode_config.h"
 #include "nnik_imath.h"
 
 #if NNIK_GC_TICK_HZ > 12000
 #error "NNIK_GC_TICK_HZ above 12 kHz overflows the 32-bit tick count"
-#endif
-#ifndef NNIK_GC_RULE
-#define NNIK_GC_RULE 0 /* 0 s, 1 z, 2 e, 3 m300, 4 none */
 #endif
 #ifndef NNIK_GC_MARLIN
 #define NNIK_GC_MARLIN 0
@@ -36,53 +35,13 @@
 #if NNIK_GC_TICK_HZ % NNIK_GC_SAMPLE_HZ
 #error "NNIK_GC_SAMPLE_HZ must divide NNIK_GC_TICK_HZ"
 #endif
-#define TOOL_SCALED 0x100
-#define S_FULL (NNIK_GC_S_MAX * 1000L)
-#define Z_HOME (NNIK_GC_PEN_Z_UM + 5000L)
 #define DWELL_MS_MAX 16777215L
-#if NNIK_GC_TOOL == 1
-#define OFF_DUTY NNIK_GC_PEN_UP_DUTY
-#else
-#define OFF_DUTY 0
-#endif
 
 #if defined(__GNUC__)
 #define NOINLINE __attribute__((noinline))
 #else
 #define NOINLINE
 #endif
-
-void nnik_gc_read_reset(nnik_gc_t *g);
-
-void nnik_gc_init(nnik_gc_t *g, nnik_gc_emit_fn emit)
-{
-    const int32_t at[2] = {0, 0};
-    g->emit = emit;
-    nnik_gc_place(g, at);
-}
-
-void nnik_gc_place(nnik_gc_t *g, const int32_t pt[2])
-{
-    uint8_t *p = (uint8_t *)g;
-    uint16_t i;
-    int32_t in[2], at[2];
-    nnik_gc_emit_fn emit = g->emit;
-    at[0] = pt[0]; /* pt may lie in *g */
-    at[1] = pt[1];
-    for (i = 0; i < sizeof *g; i++)
-        p[i] = 0;
-    g->mp[0] = g->pt[0] = at[0];
-    g->mp[1] = g->pt[1] = at[1];
-    in[0] = NNIK_GC_ORIGIN_X_UM + at[0];
-    in[1] = NNIK_GC_ORIGIN_Y_UM + at[1];
-    NNIK_GC_IK(in, g->steps);
-    g->feed = NNIK_GC_FEED_UM_MIN;
-    g->home[0][2] = g->home[1][2] = Z_HOME;
-    nnik_pl_init(&g->pl, g->pt);
-    nnik_sh_init(&g->sh, g->pt);
-    g->emit = emit;
-    nnik_gc_read_reset(g);
-}
 
 /* ---------------------------------------------------------------- segments */
 static void out_sample(nnik_gc_t *g, const int32_t p[2], uint16_t tool, uint32_t v, uint32_t vn)
@@ -173,68 +132,11 @@ NOINLINE static int8_t push(nnik_gc_t *g, const int32_t p[2], int32_t feed)
     return 0;
 }
 
-/* ---------------------------------------------------------------- the tool */
-#if NNIK_GC_TOOL == 1 && NNIK_GC_RULE == 1
-static int32_t work_z(const nnik_gc_t *g)
-{
-    return g->mp[2] - (g->coord[g->wcs][2] + g->g92[2] + g->tlo);
-}
-#endif
-
-NOINLINE static uint16_t idle_tool(const nnik_gc_t *g)
-{
-#if NNIK_GC_TOOL == 1
-#if NNIK_GC_RULE == 1
-    uint8_t down = work_z(g) <= NNIK_GC_PEN_Z_UM;
-#elif NNIK_GC_RULE == 0
-    uint8_t down = g->spindle && g->s > 0;
-#elif NNIK_GC_RULE == 3
-    uint8_t down = g->pen;
-#else
-    uint8_t down = 0;
-    (void)g;
-#endif
-    return down ? NNIK_GC_PEN_DOWN_DUTY : NNIK_GC_PEN_UP_DUTY;
-#else
-    (void)g;
-    return 0;
-#endif
-}
-
-NOINLINE static uint16_t move_tool(const nnik_gc_t *g, uint8_t rapid, uint8_t extrude)
-{
-#if NNIK_GC_RULE == 2
-    (void)g;
-    (void)rapid;
-#if NNIK_GC_TOOL == 1
-    return extrude ? NNIK_GC_PEN_DOWN_DUTY : OFF_DUTY;
-#else
-    return extrude ? 255 : 0;
-#endif
-#elif NNIK_GC_TOOL == 1
-    (void)rapid;
-    (void)extrude;
-    return idle_tool(g);
-#elif NNIK_GC_RULE == 0
-    uint16_t t;
-    (void)extrude;
-    if (rapid || !g->spindle)
-        return 0;
-    t = (uint16_t)((uint32_t)(g->s < S_FULL ? g->s : S_FULL) * 255UL / (uint32_t)S_FULL);
-    return g->spindle == 4 ? t | TOOL_SCALED : t;
-#else
-    (void)g;
-    (void)rapid;
-    (void)extrude;
-    return 0;
-#endif
-}
-
 /* ---------------------------------------------------------------- moves */
 NOINLINE static int8_t line_to(nnik_gc_t *g, const int32_t t[3], int32_t feed, uint8_t rapid, uint8_t extrude)
 {
     g->mp[2] = t[2];
-    g->tool = move_tool(g, rapid, extrude);
+    g->tool = nnik_gc_move_tool(g, rapid, extrude);
     if (t[0] != g->mp[0] || t[1] != g->mp[1]) {
         int8_t r = push(g, t, feed);
         if (r)
@@ -565,7 +467,7 @@ int8_t nnik_gc_exec(nnik_gc_t *g)
         uint32_t ms = (uint32_t)dwell_ms;
         uint32_t t = ms / 1000 * NNIK_GC_TICK_HZ + ms % 1000 * NNIK_GC_TICK_HZ / 1000;
         if (t && !g->check)
-            rest(g, t, idle_tool(g));
+            rest(g, t, nnik_gc_idle_tool(g));
 #if NNIK_GC_WCS
     } else if (nm == NM_G10) {
         uint8_t p = V(W_P)->ip ? (uint8_t)(V(W_P)->ip - 1) : g->wcs;
@@ -625,13 +527,13 @@ int8_t nnik_gc_exec(nnik_gc_t *g)
 #endif
             if (!per_point) {
                 g->mp[2] = tgt[2];
-                g->tool = move_tool(g, 0, extrude);
+                g->tool = nnik_gc_move_tool(g, 0, extrude);
             }
             chords_start(g, motion, c, c1, c2, tgt, rad);
             while (!r && chord_next(g, motion, c, p)) {
                 if (per_point) {
                     g->mp[2] = p[2];
-                    g->tool = move_tool(g, 0, extrude);
+                    g->tool = nnik_gc_move_tool(g, 0, extrude);
                 }
                 if (p[0] != g->mp[0] || p[1] != g->mp[1]) {
                     r = push(g, p, f);
@@ -663,8 +565,8 @@ int8_t nnik_gc_exec(nnik_gc_t *g)
     }
     seg_blocks = g->blocks != blk0;
     if ((end_tool || end_stop == 2 || end_stop == 30) && !seg_blocks &&
-        g->last_tool != idle_tool(g) && (NNIK_GC_TOOL == 1 || move_tool(g, 0, 0) == 0) && !g->check)
-        rest(g, 1, idle_tool(g));
+        g->last_tool != nnik_gc_idle_tool(g) && (NNIK_GC_TOOL == 1 || nnik_gc_move_tool(g, 0, 0) == 0) && !g->check)
+        rest(g, 1, nnik_gc_idle_tool(g));
     if (end_wait || end_stop == 0 || end_stop == 2 || end_stop == 30) {
         if (!g->check)
             nnik_gc_flush(g);

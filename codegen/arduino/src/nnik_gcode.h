@@ -9,7 +9,7 @@
  * characters and '/' dropped, '(' to the first ')' and ';' to the end are comments, lower case
  * raised, 79 characters fit (error 11 beyond); a '%' line is ignored, '*nn' is Marlin's checksum.
  * Words (nnik_gc_parse.c): grbl's letters plus E (Marlin), H, O, Q; within a modal group the last
- * word wins.  Execution (here): G0 G1 G2 G3 (I J K or R, every plane) G5 (Marlin's Bezier) G4
+ * word wins.  Execution (nnik_gcode.c; the tool's word nnik_gc_tool.c): G0 G1 G2 G3 (I J K or R, every plane) G5 (Marlin's Bezier) G4
  * G10 L2/L20 G17-G19 G20 G21 G28 G28.1 G30 G30.1 G43.1 G49 G53 G54-G59 G80 G90 G91 G90.1 G91.1
  * G92 G92.1 G93 G94, M0 M2 M30 M3 M4 M5 M400 M82 M83 M300 (a servo pen), F S T; other M codes
  * and setup codes are accepted and do nothing.
@@ -19,6 +19,9 @@
  * (nnik_plan.h).  The planner's fixed-rate samples (NNIK_GC_SAMPLE_HZ) pass the input shaper
  * (nnik_shaper.h); the engine calls the IK on every shaped sample (plus the work origin) and hands
  * the steps from the previous sample to emit() with the sample's ticks.
+ *
+ * Start and soft reset: nnik_gc_init.c.  Shared integer maths: nnik_imath.c.  No two of these files
+ * call each other (tests/firmware/test_c_calls.py).
  *
  * Configuration comes from nnik_gcode_config.h (written by `nnik export --arduino`).
  */
@@ -114,6 +117,9 @@ void nnik_gc_flush(nnik_gc_t *g);
 
 /* internal: the words of g->line run (nnik_gc_parse.c -> nnik_gcode.c) */
 int8_t nnik_gc_exec(nnik_gc_t *g);
+
+/* internal: the line reader's state cleared (nnik_gc_read.c; nnik_gc_place calls it) */
+void nnik_gc_read_reset(nnik_gc_t *g);
 
 #ifdef __cplusplus
 }
