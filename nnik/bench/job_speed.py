@@ -70,7 +70,7 @@ def in_process(out: Path, job: Path) -> dict:
     """The Python model's run_job timed inside one process after its imports (torch, the
     pipeline, matplotlib): the share of the command that is the model's own work."""
     code = ("import json, sys, time; from pathlib import Path; import nnik.pipeline, nnik.firmware.gcode.plot; "
-            "from nnik.firmware.gcode.job import run_job; t = time.perf_counter(); "
+            "from nnik.job.open_loop import run_job; t = time.perf_counter(); "
             "r = run_job(Path(sys.argv[1]), Path(sys.argv[2]), use_chip=False); "
             "print(json.dumps([time.perf_counter() - t, r['motion']['job_s'], r['motion']['samples']]))")
     r = subprocess.run([sys.executable, "-c", code, str(out), str(job)], capture_output=True, text=True, check=True)

@@ -57,7 +57,9 @@ def machines(scn, plan_blocks: int, sample_hz: int = 1000) -> dict:
 def run_one(run: Path, cfg, work: Path, jobs=JOBS) -> dict:
     from nnik.firmware.arduino import export_arduino
     from nnik.firmware.gcode import chip
-    from nnik.firmware.gcode.job import CLOCK_HZ, cpu_report, motion_report, read_job
+    from nnik.firmware.gcode.chip import CLOCK_HZ
+    from nnik.firmware.gcode.job_input import read_job
+    from nnik.job.measure import cpu_report, motion_report
     from nnik.firmware.gcode.motion import interpret, plan_steps
     from nnik.firmware.gcode.steps import chip_events, model_events
     from nnik.firmware.ik_oracle import ik_oracle

@@ -135,7 +135,7 @@ def print_gcode_summary(g: dict) -> None:
 
 def behind_message(chip: dict, res: dict) -> str:
     """The simulated chip had not finished when its simulated-time bound ran out."""
-    from nnik.firmware.gcode.job import CLOCK_HZ
+    from nnik.firmware.gcode.chip import CLOCK_HZ
 
     period = CLOCK_HZ / res["motion"]["sample_hz"]
     per = chip.get("cycles_per_sample") or {}
@@ -148,18 +148,20 @@ def behind_message(chip: dict, res: dict) -> str:
 
 
 def cmd_job(args) -> dict:
-    from nnik.firmware.gcode.job import run_job
     from nnik.firmware.gcode.job_input import JobOptions
+    from nnik.firmware.model_dir import ModelDir
+    from nnik.job.open_loop import run_job
 
     out, scn = _model_dir(args)
     from nnik.files.pick_state import require_deliverable
 
-    require_deliverable(out, "job")  # the job runs the firmware: only the verified pick, never the MLP instead
+    st = require_deliverable(out, "job")  # the job runs the firmware: only the verified pick, never the MLP instead
     opts = JobOptions(flavour=args.flavour, tool=args.tool, tool_rule=args.tool_rule, tool_z_mm=args.tool_z, fit=args.fit,
                       scale=args.scale, offset=args.offset)
     res = run_job(out, Path(args.job), seg_um=args.seg_um, use_chip=False if args.no_chip else None,
                   shaper=args.shaper, precompensate=args.precompensate, opts=opts, check=args.check, mcu=args.mcu,
-                  scenario=scn, warn=lambda w: print(f"nnik: warning: {w}", file=sys.stderr, flush=True))
+                  scenario=scn, warn=lambda w: print(f"nnik: warning: {w}", file=sys.stderr, flush=True),
+                  model=ModelDir.load(out, st))
     if args.check:
         print_gcode_summary(res)
         c = res["check"]

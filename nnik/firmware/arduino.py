@@ -15,14 +15,12 @@ from pathlib import Path
 import jinja2
 import numpy as np
 
-from nnik import pipeline
 from nnik.errors import NnikError
 from nnik.machine.domain import domain_um
 from nnik.emit.templating import CODEGEN, RUNTIME, environment
 from nnik.firmware.config import MachineConfig, default_machine
 from nnik.firmware.grbl_settings import grbl_settings, settings_c_string
 from nnik.emit.c_text import c_comment_safe
-from nnik.firmware.ik_oracle import ik_oracle, ik_sources, load_scenario_of, picked_implementation
 
 ARDUINO = CODEGEN / "arduino"
 ENGINE_C = ("nnik_gc_init.c", "nnik_gc_read.c", "nnik_gcode.c", "nnik_gc_parse.c", "nnik_gc_tool.c",
@@ -67,30 +65,28 @@ def check_libdir(libdir: Path, outdir: Path) -> Path:
     return Path(libdir)
 
 
-def export_arduino(outdir: Path, libdir: Path, machine: MachineConfig | None = None) -> dict:
+def export_arduino(outdir: Path, libdir: Path, machine: MachineConfig | None = None, model=None) -> dict:
     """Write the library as a whole (nnik.files.replace_dir: an earlier export's folder is replaced
     with nothing of it left, a folder nnik did not write is refused); returns {"libname", "dir",
-    "name", "machine", "golden"}."""
+    "name", "machine", "golden"}. model: OUTDIR as a job has read it (nnik.firmware.model_dir),
+    else it is read here."""
     from nnik.files.replace_dir import staged_folder
+    from nnik.firmware.model_dir import ModelDir
 
     outdir, final = Path(outdir), check_libdir(libdir, outdir)
-    scn = load_scenario_of(outdir)
+    model = model if model is not None else ModelDir.load(outdir)
+    scn = model.scenario
     name = scn.name
-    c_dir = ik_sources(outdir, name)
+    c_dir = model.c_sources()
     try:
         machine = machine or default_machine(scn)
     except ValueError as exc:  # [motion] shaper "auto" picks per job: a library needs a fixed one
         raise NnikError(f"{exc}; the library needs a fixed shaper", scn.source, "[motion] shaper") from None
-    ik = ik_oracle(outdir)
+    ik = model.ik
     vec = golden_vectors(scn)
     out, flags = ik(vec)
     rows = [[int(a), int(b), int(c), int(d), int(f)] for (a, b), (c, d), f in zip(vec.tolist(), out.tolist(), flags.tolist())]
-    pick = picked_implementation(outdir)
-    if pick is not None:
-        what, hash_ = pick.describe(), pick.source_hash()
-    else:
-        what = "MLP " + "-".join(map(str, _shape(outdir)))
-        hash_ = pipeline.load_metrics(outdir).get("fixed", {}).get("model_hash", "-")
+    what, hash_ = model.label()
     libname = f"nnik_{name}"
     with staged_folder(final, MARKER, "Arduino library", f"{libname} {VERSION}: written by nnik export --arduino\n") \
             as libdir:
@@ -147,7 +143,3 @@ def homepage() -> str:
     except metadata.PackageNotFoundError:
         return ""
     return next((u.strip() for label, _, u in (e.partition(",") for e in entries) if label.strip() == "Homepage"), "")
-
-
-def _shape(outdir: Path) -> list[int]:
-    return pipeline.load_metrics(outdir).get("network", {}).get("shape", [])

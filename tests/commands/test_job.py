@@ -8,7 +8,7 @@ from pathlib import Path
 from rich.console import Console
 
 from nnik.commands.job import job_table
-from nnik.firmware.gcode.job import run_job
+from nnik.job.open_loop import run_job
 from nnik.report.job_summary import JOB_HEADER, job_row
 from tests.bad_input import copy_run, tiny_run  # noqa: F401 (fixture)
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from nnik.firmware.gcode.job import run_job
+from nnik.job.open_loop import run_job
 from nnik.report.job_summary import JOB_HEADER
 from nnik.report import write_report
 from tests.bad_input import copy_run, tiny_run  # noqa: F401 (fixture)

@@ -123,7 +123,7 @@ def run_both(entry, lines: list[str]):
     """The lines through the Python model and the simulated chip: (plan, segments, chip run), with
     the chip's answers, segments and every step checked against the model's, and the run's end
     checked to fall when the last segment's last tick is over, however the job ends."""
-    from nnik.firmware.gcode.job import CLOCK_HZ
+    from nnik.firmware.gcode.chip import CLOCK_HZ
     from nnik.firmware.gcode.motion import interpret, plan_steps
     from nnik.firmware.gcode.steps import chip_events, chip_tool_events, model_events, model_tool_events
 

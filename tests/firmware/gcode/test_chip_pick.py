@@ -16,7 +16,7 @@ import numpy as np
 from nnik import pipeline
 from nnik.firmware.arduino import export_arduino
 from nnik.firmware.gcode import chip
-from nnik.firmware.gcode.job import CLOCK_HZ
+from nnik.firmware.gcode.chip import CLOCK_HZ
 from nnik.firmware.gcode.motion import interpret, plan_steps
 from nnik.firmware.gcode.reader import split_lines
 from nnik.firmware.gcode.steps import chip_events, model_events

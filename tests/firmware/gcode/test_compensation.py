@@ -104,7 +104,7 @@ def test_zvd_at_the_true_resonance_cuts_the_ringing_of_any_belt(machine, f, zeta
 
 
 def test_job_reports_the_belts_and_auto_says_what_it_traded(corexy_run):
-    from nnik.firmware.gcode.job import run_job
+    from nnik.job.open_loop import run_job
 
     res = run_job(corexy_run, JOBS / "l_path.gcode", use_chip=False, shaper="auto")
     d = res["dynamics"]
@@ -122,7 +122,7 @@ def test_job_reports_the_belts_and_auto_says_what_it_traded(corexy_run):
 def test_a_shaper_table_runs_beside_the_kinds_with_klippers_figures(machine):
     """A [shaper] table's per-axis shapers (here 3HUMP_EI on X, MZV on Y) are one more method,
     and the machine that runs them carries each axis's Klipper figures on the belts' resonance."""
-    from nnik.firmware.gcode.job import motion_report
+    from nnik.job.measure import motion_report
 
     scn, cfg, ik = machine
     table = {"type": ("3hump_ei", "mzv"), "freq_hz": (40.0, 41.0), "damping": (0.1, 0.1), "label": "3hump_ei/mzv"}

@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from nnik.firmware.gcode.job import CLOCK_HZ
+from nnik.firmware.gcode.chip import CLOCK_HZ
 from nnik.firmware.gcode.motion import interpret, plan_steps
 from nnik.firmware.gcode.pty_chip import PtyChip, wait_until
 from nnik.firmware.gcode.steps import chip_events, model_events

@@ -12,10 +12,12 @@ import numpy as np
 import pytest
 
 from nnik.errors import NnikError
-from nnik.firmware.gcode.job import machine_for, python_model
+from nnik.firmware.gcode.motion import plan_steps
 from nnik.firmware.gcode.job_input import JobOptions, prepare, read_job
 from nnik.firmware.gcode.reader import sendable
-from nnik.firmware.ik_oracle import load_scenario_of
+from nnik.firmware.ik_oracle import ik_oracle, load_scenario_of
+from nnik.job.parse import machine_for
+from nnik.job.plan import interpret
 
 REAL = Path(__file__).resolve().parents[2] / "data" / "gcode" / "real"
 EXPECTED = tomllib.loads((REAL / "EXPECTED.toml").read_text())
@@ -55,8 +57,8 @@ def test_each_file_runs_or_is_refused_by_name(machines, name, machine):
         return
     prep = prepare(lines, cfg, opts, name)
     assert prep.summary["flavour"] == e["flavour"]
-    plan, seg, _ = python_model(run, [sendable(ln).decode("latin-1") for ln in prep.lines], prep.cfg, name,
-                                prep.line_of)
+    plan = interpret([sendable(ln).decode("latin-1") for ln in prep.lines], prep.cfg, name, prep.line_of)
+    seg = plan_steps(plan, prep.cfg, ik_oracle(run))
     assert set(plan.replies) <= {"ok"}
     assert int(seg.clamped.sum()) == 0  # the job was fitted, never clamped
     if seg.ends_um.size:
@@ -77,7 +79,7 @@ def test_short_files_on_the_simulated_uno(machines, name, machine):
 
     require_chip()
     from nnik import pipeline
-    from nnik.firmware.gcode.job import run_job
+    from nnik.job.open_loop import run_job
 
     run, _, opts = machines[machine]
     pipeline.export(run)  # the pick's C, as `nnik run` leaves it

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from nnik.firmware.config import default_machine
-from nnik.firmware.gcode.job import tool_report
+from nnik.job.measure import tool_report
 from nnik.firmware.gcode.job_input import JobOptions, prepare, read_job
 from nnik.firmware.gcode.reader import sendable
 from nnik.firmware.ik_oracle import load_scenario_of
