@@ -140,10 +140,7 @@ LAYERS = (
     ("bench", "estimate.tools"),
 )
 # Known upward edges, each with its reason. Nothing else may import upward.
-UPWARD_ALLOWED = {
-    # [export] tanh is checked when the scenario file is read, against the MLP's tanh variants
-    ("nnik.machine.scenario", "nnik.implementations.mlp.tanh"),
-}
+UPWARD_ALLOWED: set[tuple[str, str]] = set()  # nothing may import upward
 FAMILY_FOLDERS = ("mlp", "poly", "lut", "hybrid")
 ESTIMATE_TOOLS = ("sweep", "calibrate", "measure", "search_check", "__main__")
 

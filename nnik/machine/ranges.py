@@ -37,6 +37,10 @@ SCALE_MIN, SCALE_MAX = SCALE_Q16_MIN / Q16, SCALE_Q16_MAX / Q16
 OFFSET_MM_MAX = MAX_LENGTH_MM  # a shift larger than the largest machine leaves every workspace
 SEG_UM_MIN, SEG_UM_MAX = 100, 5000  # the longest arc chord (nnik_gc_geom.c refuses others with #error)
 TOOL_Z_MM_MAX = 1000.0  # pen_z_um within +-1 m: int32 with room for Z_HOME and the job's Z
+# [export] tanh: the MLP's tanh replacements by name (their specs are the MLP family's
+# implementations/mlp/tanh_spec.SPECS, in this order; a test holds the two lists equal)
+TANH_VARIANTS = ("paper_lsq5", "paper_minimax5", "paper_minimax5_c", "lsq3_x11", "minimax3_x11", "minimax2_x22",
+                 "minimax2_x44", "lerp32", "lerp64", "lerp_mr", "lerp_mr4")
 TOOL_Z_UM_MAX = int(TOOL_Z_MM_MAX * 1000)
 
 

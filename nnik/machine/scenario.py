@@ -241,11 +241,9 @@ class Scenario:
         tool = validate_table(top["tool"], TOOL, source, "tool")
         motion, dynamics = validate_motion(top["motion"], top["dynamics"], source)
         shaper = validate_shaper(top["shaper"], motion, top["motion"], source)
-        if export["tanh"] != "default":
-            from nnik.implementations.mlp.tanh import VARIANTS
-
-            if export["tanh"] not in VARIANTS:
-                raise NnikError(f"unknown tanh variant; choose one of default, {', '.join(VARIANTS)}", source, "[export] tanh")
+        if export["tanh"] != "default" and export["tanh"] not in ranges.TANH_VARIANTS:
+            raise NnikError(f"unknown tanh variant; choose one of default, {', '.join(ranges.TANH_VARIANTS)}",
+                            source, "[export] tanh")
         return cls(
             name=top["name"],
             source=source,

@@ -153,3 +153,12 @@ def test_tool_values_the_scenario_accepts_build_and_others_are_one_line(tmp_path
     else:
         with pytest.raises(NnikError, match=rf"\[tool\] {key}: must be"):
             load_scenario(p)
+
+
+def test_the_scenarios_tanh_names_are_the_mlp_familys_variants():
+    """[export] tanh is checked against ranges.TANH_VARIANTS when the scenario is read (the machine
+    layer imports no family): that list must be the MLP family's specs, name for name."""
+    from nnik.implementations.mlp.tanh_spec import SPECS
+    from nnik.machine import ranges
+
+    assert ranges.TANH_VARIANTS == tuple(s.name for s in SPECS)

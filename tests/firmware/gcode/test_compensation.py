@@ -80,7 +80,8 @@ def test_precompensated_job_is_g_code_the_firmware_accepts(machine, tmp_path):
     assert Path(fig["pick"]["gcode"]).read_text().splitlines() == run_lines
     assert all(len(ln) <= 95 for ln in run_lines)
     plan, seg, ev = model_run(run_lines, run_cfg, ik)  # every line answered ok
-    assert len(ev) and fig["methods"]["precompensated"]["compute_s"] < 1.0
+    assert len(ev)
+    assert "compute_s" not in fig["methods"]["precompensated"]  # the job's JSON holds no wall-clock figure
     # measured against the programmed L, not against its own small moves
     assert fig["methods"]["precompensated"]["contour_um"]["max"] < fig["methods"]["none"]["contour_um"]["max"]
 
