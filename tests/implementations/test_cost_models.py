@@ -31,10 +31,7 @@ def _cal(kind: str) -> dict:
     return json.loads(costs._cal_path(kind).read_text())
 
 
-OPEN = {"poly32": "poly's wide path: avr -2.24 .. +2.36 % (18 fresh simavr draws, band 2.9 %), pic18 -1.17 .. +2.55 % "
-                   "(7 fresh gpsim draws, band 3.1 %; leave-one-out of the fit 5.8 %: SDCC's byte-loop shifts)",
-        "poly": "poly measured -3.0 .. +0.8 % on simavr (band 3.5 %); -4.0 % seen on a random DAC machine whose "
-                "output clamp is C after the assembly (cost.py does not count it)"}
+OPEN: dict[str, str] = {}  # kind -> why its band is still over 3 % (xfail strict); none open
 
 
 @pytest.mark.parametrize("kind", [pytest.param(k, marks=pytest.mark.xfail(strict=True, reason=f"issue 25 part 4 open: "
@@ -66,7 +63,7 @@ def chips():
             pytest.skip(why)
 
 
-IN_BAND = KINDS  # every family states a measured band (some still over 3 %: see OPEN)
+IN_BAND = KINDS  # every family states a measured band, each at most 3 %
 
 
 def _within_band(rows):

@@ -3,8 +3,9 @@
 The assembly the generator emits is straight-line code, so its cycles and words are counted
 from the instruction list itself (AVR: MUL*/LDS/STD 2 cycles, the rest 1; PIC18: MOVFF and BRA
 2, a skip-and-branch pair 1.5 on average, the rest 1). What the C around it costs (clamp,
-prologue and the registers the assembly makes avr-gcc save, SDCC's pointer I/O) is a linear
-model in a few counts, fitted by least squares to simavr/gpsim measurements of fixed reference
+prologue and the registers the assembly makes avr-gcc save, SDCC's pointer I/O, and the DAC
+clamps written in C after the assembly, ``c_clamps``: an output whose code range does not fit
+the assembly's int16 compare) is a linear model in a few counts, fitted by least squares to simavr/gpsim measurements of fixed reference
 configurations. ``nnik/calibration/poly.json`` holds the fit, keyed to the hash of the C those
 references emit; ``validated`` says a separate validation set was predicted within 3 % and the
 references still emit the same C.
@@ -34,13 +35,17 @@ REFERENCE = [
     ("galvo_dual_xy2", None, {"degree": 5, "split": True, "rounding": False}),
     ("corexy_nonlinear", None, {"degree": 2, "lsb": True, "split": True}),
     ("hbot_unicamp", None, {"degree": 1, "lsb": True}),
+    ("poly_ref_offaxis_dac16", None, {"degree": 2, "split": [True, False], "rounding": False}),  # 2 c_clamps on avr
 ]
 VALIDATION = [
     ("galvo_cba2012", None, {"degree": 5, "split": True}),
     ("galvo_dual_xy2", 1.0, {"degree": 5, "split": [True, False]}),
     ("galvo_dual_xy2", None, {"degree": 3}),
     ("corexy_measured", None, {"degree": 2, "lsb": True, "split": True}),
+    ("poly_ref_offaxis_dac16", None, {"degree": 6, "coef_bits": 16, "split": True}),  # 1 c_clamp on avr
 ]
+# reference machines that are not shipped scenarios (datasets/) live here
+REFERENCE_MACHINES = CALIBRATION.parent / "machines"
 
 
 # ---- counting the emitted assembly ---------------------------------------------------------------
@@ -83,8 +88,23 @@ def _p18_counts(src: str) -> dict:
     return {"asm_cycles": cyc, "asm_words": words}
 
 
-FEATURES = {"avr": ("asm_cycles", "pushes", "lsb"), "pic18": ("asm_cycles", "lsb")}
-FLASH_FEATURES = {"avr": ("asm_words", "pushes", "lsb"), "pic18": ("asm_words", "lsb")}
+# PIC18 writes its DAC clamp in C only where the range analysis lets an output leave the code
+# range; no reference does, so it is counted but not priced there (no recorded pic18 band).
+FEATURES = {"avr": ("asm_cycles", "pushes", "lsb", "c_clamps"), "pic18": ("asm_cycles", "lsb")}
+FLASH_FEATURES = {"avr": ("asm_words", "pushes", "lsb", "c_clamps"), "pic18": ("asm_words", "lsb")}
+_C_CLAMP = re.compile(r"^    if \(out\[\d+\] < ", re.M)  # the DAC clamp in C after the asm block (avr.py, p18.py)
+
+
+_SECTIONS = {"avr": ("#if defined(NNIK_KERNEL_AVR)", "\n#elif"), "pic18": ("#elif defined(NNIK_KERNEL_P18)", "\n#else")}
+
+
+def _section(src: str, target: str) -> str:
+    """The part of the C that the target's compiler builds (one source holds every path)."""
+    start, stop = _SECTIONS[target]
+    if start not in src:
+        return ""
+    part = src[src.index(start):]
+    return part[:part.index(stop, len(start))]
 
 
 def counts(impl, target: str) -> dict:
@@ -93,6 +113,7 @@ def counts(impl, target: str) -> dict:
     src = impl.render_source()
     c = _avr_counts(src) if target == "avr" else _p18_counts(src)
     c["lsb"] = len(lsb_used(impl.prog))
+    c["c_clamps"] = len(_C_CLAMP.findall(_section(src, target)))
     return c
 
 
@@ -151,7 +172,8 @@ def reference_impl(impl_cls, scn_name: str, unit, config: dict):
 
     key = (scn_name, unit)
     if key not in _STATE.setdefault("problems", {}):
-        scn = load_scenario(ROOT / "datasets" / f"{scn_name}.toml")
+        path = ROOT / "datasets" / f"{scn_name}.toml"
+        scn = load_scenario(path if path.exists() else REFERENCE_MACHINES / f"{scn_name}.toml")
         _STATE["problems"][key] = Problem(scn, build_dataset(scn), unit_um=unit or scn.export.get("input_unit_um", 1.0))
     return impl_cls.fit(_STATE["problems"][key], config)
 

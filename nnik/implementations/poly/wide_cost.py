@@ -18,6 +18,8 @@ What a call of NAME_mac(a, b, K, f) costs, and why each count is a feature:
   cycles are known, not fitted: the shift microbenchmark's ``rs`` table of the avr-gcc -Os profile
   (nnik/calibration/avr-gcc-Os.json, measured on simavr by the MLP estimator's calibration).
 * ``clamps``: outputs clamped to the actuator's code range (two 32-bit compares each).
+* ``f0_calls``: PIC18, calls with f = 0, which return the low word and skip NAME_bits (its byte
+  copy and call) altogether.
 * ``sar_bytes``, ``sar_bits``: on SDCC every nnik_sar32 (the outputs' shift, and the high word's
   shift by f - 32 of a call with f >= 32) moves whole bytes in a loop, then bits in another.
 """
@@ -31,7 +33,8 @@ from pathlib import Path
 import numpy as np
 
 FEATURES = {"avr": ("calls", "bits", "high", "negs", "k_adds", "l_adds", "clamps"),
-            "pic18": ("calls", "bits", "high", "negs", "k_adds", "l_adds", "sar_bits", "sar_bytes", "clamps")}
+            "pic18": ("calls", "bits", "high", "negs", "k_adds", "l_adds", "sar_bits", "sar_bytes", "clamps",
+                      "f0_calls")}
 FLASH_FEATURES = {"avr": ("calls", "bits", "k_adds", "l_adds"), "pic18": ("calls", "k_adds", "l_adds")}
 GRID = 41  # points per axis of the domain grid the operands' signs are averaged over
 SHIFT_TABLE = Path(__file__).resolve().parents[2] / "calibration" / "avr-gcc-Os.json"
@@ -86,7 +89,7 @@ def counts(impl, target: str, inputs: tuple[np.ndarray, np.ndarray] | None = Non
     sar = shifts + [c[2] - 32 for c in calls if c[2] >= 32]
     bits = [f & 7 for _, _, f, _, _ in calls if (target == "avr" or 0 < f < 32)]
     return {"calls": len(calls), "bits": sum(bits), "high": sum(1 for c in calls if c[2] >= 32), "negs": float(negs),
-            "k_adds": sum(1 for c in calls if c[3] != 0), "l_adds": sum(1 for c in calls if c[4] is not None),
+            "f0_calls": sum(1 for c in calls if c[2] == 0), "k_adds": sum(1 for c in calls if c[3] != 0), "l_adds": sum(1 for c in calls if c[4] is not None),
             "known": known_cycles(impl, target),
             "clamps": len(shifts) if impl.problem.code_range is not None else 0,
             "sar_bits": sum(s & 7 for s in sar), "sar_bytes": sum(s >> 3 for s in sar)}

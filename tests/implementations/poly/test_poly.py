@@ -171,3 +171,25 @@ def test_calibration_matches_the_emitted_c():
         assert e["validated"] == cal["validated"]
         ref = cal["reference"][1][t]  # the same configuration, measured at calibration time
         assert abs(e["cycles"] - ref["cycles"]) < 0.03 * ref["cycles"]
+
+
+def test_a_dac_clamp_written_in_c_is_counted_and_priced(tmp_path):
+    """An off-axis 16-bit DAC gimbal: its outputs' offsets put the DAC range outside int16, so the
+    clamp is C after the assembly (avr.py, p18.py). The cost model counts those clamps
+    (c_clamps) and prices them, within the recorded band on simavr, on a configuration that
+    neither the calibration's references nor its validation set hold."""
+    from nnik.implementations.poly import cost as poly_cost
+    from nnik.implementations.cost_band import stated_band
+
+    require_tool("simavr")
+    p = problem_from(poly_cost.REFERENCE_MACHINES / "poly_ref_offaxis_dac16.toml")
+    im = PolyImpl.fit(p, {"degree": 3, "coef_bits": 32})
+    src = im.render_source()  # one source, every target's path
+    avr_part = src[src.index("#if defined(NNIK_KERNEL_AVR)"):src.index("#elif")]
+    n = poly_cost.counts(im, "avr")["c_clamps"]
+    assert n >= 1 and avr_part.count("    if (out[") == n
+    e = im.estimate("avr")
+    r = verify_on_target(im, "avr", tmp_path / "c", tmp_path / "avr", n_inside=40)
+    assert r["bit_exact"]
+    band = stated_band(json.loads(poly_cost.CALIBRATION.read_text()), "avr")
+    assert abs(e["cycles"] - r["cycles"]) <= band / 100 * r["cycles"], (e, r["cycles"])

@@ -134,3 +134,19 @@ def test_the_operands_signs_are_priced_from_the_program(dac16):
     left = x <= np.median(x)
     assert wide_cost.counts(im, "avr", (x[left], y[left]))["negs"] != c["negs"]
     assert wide_cost.counts(im, "pic18")["known"] == 0 < c["known"]
+
+
+@pytest.mark.parametrize("degree", [1, 3, 5])
+def test_calls_that_skip_the_bit_pick_are_counted_from_the_c(dac16, degree):
+    """f0_calls: the NAME_mac calls whose shift f is 0 (on SDCC they return the low word and skip
+    NAME_bits), read back from the calls the emitted C makes."""
+    import re
+
+    from nnik.implementations.poly import wide_cost
+
+    im = PolyImpl.fit(dac16, {"degree": degree, **W32})
+    shifts = [int(f) for f in re.findall(r"_mac\([^;]*?, (\d+)\)", "\n".join(wide.lines(im)))]
+    c = wide_cost.counts(im, "pic18")
+    assert len(shifts) == c["calls"]
+    assert c["f0_calls"] == shifts.count(0)
+    assert c["high"] == sum(f >= 32 for f in shifts)
