@@ -17,8 +17,8 @@ from nnik.implementations.problem import Problem
 __all__ = ["FAMILIES", "REGISTRY", "Implementation", "IntRun", "Problem", "family", "load_family"]
 
 # The registry: family name -> the module that holds its IMPLEMENTATION (an Implementation
-# subclass). Adding a family is one folder under nnik/implementations/ and one line here (README:
-# "Adding a family").
+# subclass). Adding a family is one folder under nnik/implementations/ and one line here
+# (docs/families.md, "Adding a family").
 REGISTRY = {
     "mlp": "nnik.implementations.mlp.family",
     "poly": "nnik.implementations.poly.family",
