@@ -49,7 +49,7 @@ def measure(outdir: Path, depths=DEPTHS) -> list[dict]:
                 except TargetError as exc:
                     rows.append({**row, "error": str(exc).splitlines()[0]})
                     continue
-                res = chip.run_firmware(fw, read_job(JOB), work / "build", 60.0)
+                res = chip.run_firmware(fw, [ln.decode("latin-1") for ln in read_job(JOB)], work / "build", 60.0)
                 rows.append({**row, "flash_bytes": fw.flash_bytes, "ram_bytes": fw.ram_bytes,
                              "stack_bytes": res.stack_bytes, "left_bytes": chip.RAM_BYTES - fw.ram_bytes})
     return rows

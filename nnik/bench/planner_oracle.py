@@ -118,7 +118,7 @@ def block_time(L: float, v0: float, v1: float, vn: float, a: float) -> float:
 def plan(ops: list[tuple], cfg, lookahead: int | None = -1) -> FPlan:
     """Plan the job: lookahead -1 (default) uses cfg.plan_blocks, None is unlimited, else that
     many blocks (the executing one included)."""
-    n = cfg.plan_blocks if lookahead == -1 else lookahead
+    n = cfg.lookahead if lookahead == -1 else lookahead
     runs = blocks_of(ops, cfg)
     entry, exit_, total = {}, {}, 0.0
     for run in runs:

@@ -58,7 +58,10 @@ class MachineConfig:
     shaper_taps: tuple = ()
     # per axis (kind, f_hz, zeta) the taps were designed from (their Klipper figures); may be empty
     shaper_design: tuple = ()
-    plan_blocks: int = 8  # the planner's lookahead queue
+    # the planner's lookahead queue; 0: the deepest the chip's RAM holds (ranges.plan_blocks_for: 16
+    # on the Mega, on the Uno what leaves 256 B for the stack beside the shaper): read cfg.lookahead
+    plan_blocks: int = 0
+    mcu: str = "atmega328p"  # the chip the firmware is built for (avr-gcc's -mmcu)
     rule: str = ""  # the tool rule (RULES); "" = the tool's default: s for a laser, else z
     marlin: bool = False  # G4 P in ms, Marlin's setup G codes noted, E words read
     m300_down_max: int = 40  # M300 S at or below this puts a servo pen down (unicorn: 30 down, 50 up)
@@ -90,6 +93,11 @@ class MachineConfig:
     def shaper_len(self) -> int:
         """The shaper's memory in samples per axis (its longest delay); 0 without a shaper."""
         return ranges.shaper_len(self.shaper_taps)
+
+    @property
+    def lookahead(self) -> int:
+        """The planner's queue in blocks: plan_blocks, or the chip's default depth."""
+        return self.plan_blocks or ranges.plan_blocks_for(self.mcu, self.shaper_ram_bytes)
 
     @property
     def shaper_ram_bytes(self) -> int:
@@ -148,8 +156,10 @@ class MachineConfig:
         problem = ranges.shaper_problem(self.shaper_taps, self.max_feed_um_min, self.sample_hz) if self.shaper_taps else None
         if problem:
             raise ValueError(problem)
-        if not 2 <= self.plan_blocks <= 64:
+        if self.plan_blocks and not 2 <= self.plan_blocks <= 64:
             raise ValueError("planner queue must be 2..64 blocks")
+        if self.mcu not in ranges.MCU_RAM_BYTES:
+            raise ValueError(f"unknown MCU {self.mcu!r}; known: {', '.join(ranges.MCU_RAM_BYTES)}")
 
     def pen_duty(self, down: bool) -> int:
         """OCR2A of the pen up or down (pen: 0 / 255; servo: the pulse in 64 us counts)."""
@@ -174,7 +184,7 @@ class MachineConfig:
         ax, ay = self.acc_q16
         out = {"NNIK_GC_SAMPLE_HZ": f"{self.sample_hz}UL", "NNIK_GC_ACC_X": f"{ax}UL", "NNIK_GC_ACC_Y": f"{ay}UL",
                "NNIK_GC_JDEV_UM": f"{self.junction_dev_um}UL", "NNIK_GC_MAX_FEED_UM_MIN": f"{self.max_feed_um_min}L",
-               "NNIK_PL_N": str(self.plan_blocks), "NNIK_SH_LEN": str(self.shaper_len)}
+               "NNIK_PL_N": str(self.lookahead), "NNIK_SH_LEN": str(self.shaper_len)}
         if self.shaper_taps:
             n = max(len(a) for a, _ in self.shaper_taps)
             pad = [(list(a) + [0] * (n - len(a)), list(d) + [0] * (n - len(d))) for a, d in self.shaper_taps]

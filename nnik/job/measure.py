@@ -74,7 +74,7 @@ def motion_report(seg, cfg: MachineConfig, dyn: dict | None = None) -> dict:
             "sample_hz": cfg.sample_hz, "accel_mm_s2": [a / 1000.0 for a in cfg.accel_um_s2],
             "junction_deviation_mm": cfg.junction_dev_um / 1000.0, "max_feed_mm_min": cfg.max_feed_um_min / 1000.0,
             "shaper": cfg.shaper, "shaper_taps": [list(map(list, t)) for t in cfg.shaper_taps],
-            "shaper_ram_bytes": cfg.shaper_ram_bytes, "plan_blocks": cfg.plan_blocks,
+            "shaper_ram_bytes": cfg.shaper_ram_bytes, "plan_blocks": cfg.lookahead,
             "shaper_figures": axis_figures(cfg.shaper_design if cfg.shaper != "none" else (), dyn)}
 
 

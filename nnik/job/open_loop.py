@@ -14,7 +14,7 @@ its cycles per sample, flash and SRAM. Results: OUTDIR/job/<job>.json and <job>.
 from __future__ import annotations
 
 from concurrent.futures import ThreadPoolExecutor
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Callable
 
@@ -50,6 +50,7 @@ class OpenLoopJob(JobKind):
         from nnik.firmware.gcode import chip
 
         parsed = parse(request)
+        parsed = replace(parsed, cfg=replace(parsed.cfg, mcu=self.mcu))  # the chip's lookahead, the model's too
         if self.check:
             return check(parsed)
         ik = model.ik  # read here, before the chip's build thread shares it

@@ -202,3 +202,29 @@ def shaper_problem(taps, feed_um_min: int, sample_hz: int) -> str | None:
         return (f"shaper needs {shaper_ram_bytes(taps)} B of SRAM (> {SHAPER_RAM_BUDGET} B): its longest delay, "
                 f"{shaper_len(taps)} samples, is too long; raise f or lower sample_hz")
     return None
+
+
+# The planner's lookahead per chip (issue 26): grbl's 16 blocks where the G-code sketch's static RAM
+# leaves STACK_RESERVE_BYTES for the stack (on the Uno: 12 blocks without a shaper, 8-9 with ZVD). The sketch's RAM (avr-size .data + .bss of the Uno's sender
+# build, nnik.bench.plan_ram; tests/firmware/gcode/test_plan_depth.py checks the formula against the
+# real build) is GCODE_RAM_BYTES, PLAN_BLOCK_BYTES per queued block, and the shaper's buffers plus
+# SHAPER_CODE_RAM_BYTES when a shaper is built in. The IK's tables live in flash: the same on every IK.
+PLAN_BLOCKS_MAX = 16
+PLAN_BLOCK_BYTES = 44  # sizeof(nnik_pl_block_t) on AVR
+GCODE_RAM_BYTES = 1004  # the sender build's static RAM less the queue and the shaper
+SHAPER_CODE_RAM_BYTES = 10  # the shaper's own statics beside its buffers
+# what the stack keeps: the issue's 256 B at least, and the sketch's deepest stack on simavr, 510 B on
+# every shipped job and build measured (nnik.bench.plan_ram; the test runs the circle job and checks it)
+STACK_RESERVE_BYTES = max(256, 512)
+MCU_RAM_BYTES = {"atmega328p": 2048, "atmega2560": 8192}
+
+
+def gcode_ram_bytes(blocks: int, shaper_ram: int) -> int:
+    """The G-code sketch's static RAM with that many planner blocks and shaper buffers (B)."""
+    return GCODE_RAM_BYTES + PLAN_BLOCK_BYTES * blocks + (shaper_ram + SHAPER_CODE_RAM_BYTES if shaper_ram else 0)
+
+
+def plan_blocks_for(mcu: str, shaper_ram: int) -> int:
+    """The deepest lookahead (2..PLAN_BLOCKS_MAX) whose build leaves STACK_RESERVE_BYTES of the chip's RAM."""
+    free = MCU_RAM_BYTES[mcu] - STACK_RESERVE_BYTES - gcode_ram_bytes(0, shaper_ram)
+    return max(2, min(PLAN_BLOCKS_MAX, free // PLAN_BLOCK_BYTES))

@@ -89,7 +89,7 @@ class Planner:
 
     def __init__(self, cfg: MachineConfig, p=(0, 0)):
         self.cfg = cfg
-        self.n = cfg.plan_blocks
+        self.n = cfg.lookahead
         self.q: list[Block] = []
         self.start = tuple(p)
         self.last = tuple(p)
