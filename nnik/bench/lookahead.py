@@ -2,9 +2,10 @@
 nnik.bench.planner_compare states):
 
 * the lookahead's cost on short-chord jobs: a 5 mm radius circle in chords of 0.01-0.2 mm at
-  3000 mm/min, 1000 mm/s^2, for queues of 8, 15 and 16 blocks: the integer planner's job time
-  against the float planner with the same queue and with unlimited lookahead, and the float
-  planner's own finite / unlimited ratio;
+  3000 mm/min, 1000 mm/s^2, for queues of 8, 15 and 16 blocks and each chip's default depth (the
+  Uno's and the Mega's, unshaped: nnik.machine.ranges.plan_blocks_for, printed side by side): the
+  integer planner's job time against the float planner with the same queue and with unlimited
+  lookahead, and the float planner's own finite / unlimited ratio;
 * the junction speed and acceleration ratios (integer / grbl's float limit) over random paths
   with random limits (corners, chords, arcs, reversals), and the job-time ratio.
 Figures go to build/bench/lookahead.json too."""
@@ -22,10 +23,12 @@ from nnik.bench import planner_oracle as oracle
 from nnik.bench.planner_compare import compare
 from nnik.bench.planner_paths import chord_ops, path_ops, random_pieces
 from nnik.firmware.config import MachineConfig
+from nnik.machine.ranges import plan_blocks_for
 
 OUT = Path("build") / "bench"
 CHORDS_UM = (10, 20, 50, 100, 150, 200)
-QUEUES = (8, 15, 16)
+CHIPS = {"Uno": plan_blocks_for("atmega328p", 0), "Mega": plan_blocks_for("atmega2560", 0)}
+QUEUES = tuple(sorted({8, 15, 16, *CHIPS.values()}))
 
 
 def chord_table() -> list[dict]:
@@ -75,13 +78,18 @@ def main(argv=None) -> int:
     for r in rows:
         print(f"  {r['chord_um']:>4}um {r['blocks']:>6} {r['int_vs_float_same']:>17.4f} {r['int_vs_unlimited']:>14.4f}"
               f" {r['float_same_vs_unlimited']:>18.4f}")
+    print("each chip's default depth (unshaped): job time / unlimited lookahead")
+    print(f"  {'chord':>6}" + "".join(f" {f'{c} ({n} blocks)':>16}" for c, n in CHIPS.items()))
+    for chord in CHORDS_UM:
+        got = {r["blocks"]: r["int_vs_unlimited"] for r in rows if r["chord_um"] == chord}
+        print(f"  {chord:>4}um" + "".join(f" {got[n]:>16.4f}" for n in CHIPS.values()))
     rr = random_ratios(args.jobs, args.seed)
     print(f"random paths ({rr['jobs']} jobs, {rr['junctions']} junctions): junction / grbl limit max {rr['junction_max']:.4f}, "
           f"median {rr['junction_median']:.4f} ({rr['junctions_above_limit']} above 1); accel / limit max {rr['accel_max']:.4f} "
           f"({rr['samples_above_accel']} above 1); job time / float (same N) {rr['time_ratio_min']:.4f}.."
           f"{rr['time_ratio_max']:.4f}, median {rr['time_ratio_median']:.4f}")
     OUT.mkdir(parents=True, exist_ok=True)
-    (OUT / "lookahead.json").write_text(json.dumps({"chords": rows, "random": rr}, indent=2) + "\n")
+    (OUT / "lookahead.json").write_text(json.dumps({"chords": rows, "chips": CHIPS, "random": rr}, indent=2) + "\n")
     return 1 if rr["junctions_above_limit"] or rr["samples_above_accel"] else 0
 
 
