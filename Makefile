@@ -56,6 +56,7 @@ bench: setup toolchains
 	$(PYTHON) -m nnik.bench.job_speed
 	$(PYTHON) -m nnik.bench.reproducible datasets/corexy_nonlinear.toml datasets/corexy_measured_2000.toml
 	$(PYTHON) -m nnik run datasets/corexy_nonlinear.toml > /dev/null && $(PYTHON) -m nnik.bench.builds build/galvo_cba2012 build/corexy_nonlinear
+	$(PYTHON) -m nnik.bench.plan_ram build/galvo_cba2012 build/corexy_nonlinear
 	$(PYTHON) -m nnik.bench.mlp_cost sweep
 	$(PYTHON) -m nnik.bench.estimator
 	$(PYTHON) -m nnik.bench.costs

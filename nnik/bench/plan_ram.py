@@ -1,4 +1,4 @@
-"""`python -m nnik.bench.plan_ram OUTDIR...`: the planner's lookahead against the Uno's SRAM (issue 26).
+"""`python -m nnik.bench.plan_ram OUTDIR...`: the planner's lookahead against the Uno's SRAM.
 For each model directory's pick, the Uno's sender build (`nnik export --arduino`) is built with
 8, 12, 15 and 16 blocks, without a shaper and with ZVD at the scenario's [dynamics] resonance (40 Hz,
 zeta 0.1 without one), at 1 kHz and 500 Hz; each build's static RAM (avr-size .data + .bss) and
