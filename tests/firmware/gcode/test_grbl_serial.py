@@ -34,11 +34,12 @@ def test_banner_ok_and_errors(uno):
     assert port.banner()[-1] == BANNER
 
 
-def test_status_reports_idle_and_during_motion(uno):
+def test_status_reports_idle_and_during_motion(uno, grbl_firmware):
     port, _ = uno
+    depth = grbl_firmware[1]["machine"].lookahead  # the chip's planner depth (ranges.plan_blocks_for)
     m = port.status()
     assert m.group(1) == "Idle" and m.group(2, 3, 4) == ("0.000", "0.000", "0.000")
-    assert m.group(5, 6) == ("8", "128") and m.group(9)  # Bf: planner blocks and RX bytes free; WCO first
+    assert m.group(5, 6) == (str(depth), "128") and m.group(9)  # Bf: planner blocks and RX bytes free; WCO first
     assert port.cmd("G1 X40 F3000") == ["ok"]
     seen = []
     for _ in range(200):
@@ -120,7 +121,7 @@ def test_dollar_commands(uno, grbl_firmware):
     assert float(table["11"]) == cfg.junction_dev_um / 1000 and float(table["130"]) > 0
     assert port.cmd("G91 G20 M3 S300 F100") == ["ok"]
     assert port.cmd("$G") == ["[GC:G0 G54 G17 G20 G91 G94 M3 M9 T0 F2540 S300]", "ok"]
-    assert port.cmd("$I") == ["[VER:1.1h.nnik:galvo_cba2012]", "[OPT:V,8,128]", "ok"]
+    assert port.cmd("$I") == ["[VER:1.1h.nnik:galvo_cba2012]", f"[OPT:V,{cfg.lookahead},128]", "ok"]
     assert port.cmd("$N") == ["$N0=", "$N1=", "ok"]
     assert port.cmd("$H") == ["error:5"]  # homing is not enabled
     assert port.cmd("$110=5000") == ["[MSG:nnik: settings are compiled in]", "error:3"]
