@@ -17,7 +17,6 @@ max_contour_um, or without one, within 25 % of the best method's contour max.
 
 from __future__ import annotations
 
-import time
 from pathlib import Path
 from dataclasses import replace
 
@@ -78,10 +77,9 @@ def _tool_lines(seg, cfg, owner: np.ndarray) -> list[str]:
     return out
 
 
-def precompensate_lines(seg, cfg, dyn: dict, source: str) -> tuple[list[str], list[int], float]:
-    """(G-code, the source sample of each line, seconds it took) of the job rewritten so the
-    modelled tip follows its planned motion."""
-    t0 = time.perf_counter()
+def precompensate_lines(seg, cfg, dyn: dict, source: str) -> tuple[list[str], list[int]]:
+    """(G-code, the source sample of each line) of the job rewritten so the modelled tip follows
+    its planned motion."""
     planned, owner = _timeline(seg)
     fs = cfg.sample_hz
     ref, base = precompensated(planned / 1000.0, fs, dyn["f_hz"], dyn["zeta"], SMOOTH_S)
@@ -94,7 +92,7 @@ def precompensate_lines(seg, cfg, dyn: dict, source: str) -> tuple[list[str], li
               f"; zeta = {list(dyn['zeta'])}, from {source}"[:90]]
     lines, src = pc_gcode(base, fs, max(1, int(round(PC_EVERY_S * fs))), np.zeros(2), header, tool)
     move_of_line = [int(seg.move[owner[k]]) if k >= 0 else -1 for k in src]
-    return lines, move_of_line, time.perf_counter() - t0
+    return lines, move_of_line
 
 
 def evaluate(scn, cfg, plan, seg, ev, dyn: dict, moves=None, keep_track: bool = False) -> dict:
@@ -123,7 +121,7 @@ def compare(scn, cfg, lines: list[str], ik, dyn: dict, source: str, methods=METH
             out[m] = {"error": str(exc)}
     if "precompensated" in methods and "none" in runs:
         c, plan, seg, ev = runs["none"]
-        pc, move_of_line, _secs = precompensate_lines(seg, c, dyn, source)  # its time: make bench (seed003)
+        pc, move_of_line = precompensate_lines(seg, c, dyn, source)
         try:
             p_plan, p_seg, p_ev = model_run(pc, c, ik)
             line_move = np.asarray(move_of_line)
