@@ -18,7 +18,8 @@ of the motion, d0 the speed the log starts with. So for each tau the rest is a l
 squares solve, and tau is found by a log-spaced grid (TAU_GRID points between 0.5 tick and
 MAX_TAU_TICKS ticks) refined by a bounded scalar search (variable projection). s is the sign of
 the model's own simulated speed (starting from the fit without friction; FRICTION_ROUNDS rounds),
-never of the noisy measured one.
+never of the noisy measured one. Friction only opposes the motion: a fit that gives it the
+other sign (noise can) is replaced by the fit without it.
 
 The covariance (for the confidence intervals) is the HAC sandwich (nnik.dynamics.servo.batch_ls)
 on the residuals with the Jacobian in (tau, K, K*Uc, d0), taken by central differences in tau.
@@ -89,19 +90,28 @@ def _best_tau(dp, u, s, tick, friction) -> float:
 
 
 def fit_output_error(dp: np.ndarray, u: np.ndarray, tick: float) -> OeFit:
-    """dp (N,) measured increments (dp[0] = 0), u (N,) volts held from each sample to the next."""
-    s = np.zeros_like(u)
-    tau = _best_tau(dp, u, s, tick, False)
+    """dp (N,) measured increments (dp[0] = 0), u (N,) volts held from each sample to the next.
+    Friction only opposes motion: a fit that gives it the other sign is replaced by the fit
+    without it (Coulomb 0)."""
+    zero = np.zeros_like(u)
+    tau0 = _best_tau(dp, u, zero, tick, False)
+    s, tau = zero, tau0
     for _ in range(FRICTION_ROUNDS):
         _, beta, x = _solve(dp, u, s, tau, tick, True)
         sim = x @ beta
         s = np.sign(np.concatenate([sim[1:], sim[-1:]]))  # the speed's sign while u[k] acts
         tau = _best_tau(dp, u, s, tick, True)
     _, beta, x = _solve(dp, u, s, tau, tick, True)
+    if not beta[1] * beta[0] > 0:  # no friction, or friction that pushes: the linear fit
+        s, tau = zero, tau0
+        _, beta, x = _solve(dp, u, s, tau, tick, True)
     r = dp - x @ beta
     h = 1e-4 * tau
     dx = (_design(u, s, tau + h, tick, True) - _design(u, s, tau - h, tick, True)) / (2 * h)
     jac = np.column_stack([dx @ beta, x])
+    if not s.any():
+        jac = np.delete(jac, 2, axis=1)  # the friction column is all zero
+        beta = np.insert(beta, 1, 0.0)
     cov = hac_covariance(jac, r)
     k = float(beta[0])
     uc = float(beta[1] / beta[0]) if beta[0] != 0 else math.nan

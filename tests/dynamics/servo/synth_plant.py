@@ -16,7 +16,7 @@ def simulate_counts(volts: np.ndarray, k: float, tau: float, tick: float, coulom
     """Counts (N,) at each tick; volts[i] held from tick i to i + 1."""
     h = tick / substeps
     a = math.exp(-h / tau)
-    rng = np.random.default_rng(seed)
+    rng = np.random.default_rng([seed, 0x5eed])  # never the excitation's stream (PCG64(seed))
     p, v = p0, 0.0
     out = np.empty(len(volts))
     for i, u in enumerate(volts):
@@ -48,3 +48,20 @@ def log_rows(volts: np.ndarray, counts: np.ndarray, tick: float) -> str:
     lines += [f"{i * tick:.6f},{volts[i, 0]:.6g},{volts[i, 1]:.6g},{counts[i, 0]:.0f},{counts[i, 1]:.0f}"
               for i in range(n)]
     return "\n".join(lines) + "\n"
+
+
+def excitation_log(k: float, tau: float, amplitude: float, half_taus: float, coulomb_v: float = 0.0,
+                   stiction_v: float = 0.0, noise_counts: float = 0.0, seed: int = 0, seconds: float = 20.0,
+                   tick: float = 0.005, supply: float = 12.0, duty_max: int = 255):
+    """A ServoLog of one plant (both axes alike but with different squares and noise): the seed's
+    excitation played on it as `nnik excite` plays it."""
+    from nnik.dynamics.servo.excitation import AxisExcitation, duties
+    from nnik.dynamics.servo.log_csv import ServoLog
+
+    n = int(round(seconds / tick))
+    half = max(int(round(half_taus * tau / tick)), 4)
+    d = duties((AxisExcitation(amplitude, half), AxisExcitation(amplitude, half + 7)), n, supply, duty_max, seed)
+    volts = d / duty_max * supply
+    counts = np.column_stack([simulate_counts(volts[:, i], k, tau, tick, coulomb_v, stiction_v, noise_counts,
+                                              seed=seed + i) for i in range(2)])
+    return ServoLog(np.arange(n) * tick, volts, counts, tick, d / duty_max)
