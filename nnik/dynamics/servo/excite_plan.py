@@ -73,7 +73,8 @@ def probe(cfg) -> tuple[Probe, Probe]:
     for i, name in enumerate(AXES):
         v_ss = float(speed[-max(int(PROBE_TAIL * n), 1):, i].mean())
         if not v_ss > 0:
-            raise NnikError(f"axis {name} does not move at {volts:.3g} V in the scenario's plant: nothing to excite")
+            raise NnikError(f"axis {name} does not move at {volts:.3g} V (half the supply) in the scenario's plant: its "
+                            "friction holds it, and the excitation's square is no larger")
         k_hit = int(np.argmax(speed[:, i] >= (1 - math.exp(-1)) * v_ss))
         out.append(Probe(v_ss / volts, max((k_hit + 0.5) * cfg.tick_s, cfg.tick_s)))
     return out[0], out[1]
