@@ -31,6 +31,7 @@ class ClosedLoopJob(JobKind):
     controller: str | None = None
     use_chip: bool | None = None
     check: bool = False
+    tag: str | None = None  # the files are OUTDIR/job/JOB_TAG.json and .png (nnik run: the controller)
     name = "closed loop"
 
     def run(self, model: ServoDir, request: JobRequest) -> dict:
@@ -47,7 +48,7 @@ class ClosedLoopJob(JobKind):
         out.mkdir(parents=True, exist_ok=True)
         looped = loop(ref, scn.servo, ctl, out / "work" / request.job.stem, self.use_chip)
         figures, contour = measure(ref, looped.trace)
-        stem = request.job.stem
+        stem = request.job.stem + (f"_{self.tag}" if self.tag else "")
         png = picture(out / f"{stem}.png", f"{scn.name}: {request.job.name}, {kind}; contour error max "
                       f"{figures['contour_um']['max_um']:.1f} µm, RMS {figures['contour_um']['rms_um']:.1f} µm",
                       ref.um, looped.trace.table_um, contour, looped.trace.duty, ref.tick_s, scn.servo.duty_max)

@@ -92,7 +92,8 @@ def steps(ref_um: np.ndarray, table_um: np.ndarray, step_ticks, tick_s: float, u
         band = max(SETTLE_BAND * size, SETTLE_MIN_COUNTS * um_per_count)
         outside = np.flatnonzero(dist > band)
         tail = dist[len(dist) - max(1, len(dist) // 10):]
-        out.append({"tick": int(k0), "from_mm": (a / 1000).round(4).tolist(), "to_mm": (b / 1000).round(4).tolist(),
+        mm = lambda p: ((p - um_per_count / 2) / 1000).round(4).tolist()  # noqa: E731 (the count, not its middle)
+        out.append({"tick": int(k0), "from_mm": mm(a), "to_mm": mm(b),
                     "size_mm": size / 1000, "overshoot_um": float(max(0.0, along.max())),
                     "settling_s": None if len(outside) and outside[-1] == len(dist) - 1
                     else float((outside[-1] + 1 if len(outside) else 0) * tick_s),
@@ -100,10 +101,11 @@ def steps(ref_um: np.ndarray, table_um: np.ndarray, step_ticks, tick_s: float, u
     return out
 
 
-def reversals(ref_um: np.ndarray, contour: np.ndarray, tick_s: float) -> dict:
+def reversals(ref_um: np.ndarray, contour: np.ndarray, step_ticks, tick_s: float) -> dict:
     """The contour error near each sign change of an axis' reference velocity (not at steps: a
     jump is no reversal of a path)."""
     v = np.diff(ref_um, axis=0)
+    v[[k - 1 for k in step_ticks if k > 0]] = 0  # a step's jump
     ticks = []
     for a in range(2):
         nz = np.flatnonzero(v[:, a] != 0)
@@ -127,6 +129,6 @@ def measure(ref, trace) -> dict:
         "tracking_um": {"x": _stats(track[:, 0]), "y": _stats(track[:, 1])},
         "saturated_fraction": float(trace.saturated_fraction),
         "steps": steps(ref_um, table, ref.step_ticks, ref.tick_s, ref.um_per_count),
-        "reversals": reversals(ref_um, contour, ref.tick_s),
+        "reversals": reversals(ref_um, contour, ref.step_ticks, ref.tick_s),
         "final_error_um": float(np.hypot(*track[-1])),
     }, contour
