@@ -14,8 +14,9 @@ stick/slip switch (Karnopp's method):
 A tick is a few such segments, each done at once with the precomputed powers (no loop over
 substeps while the axis keeps its state). The friction never flips sign between substeps while the
 axis rests, so there is no chatter: held below break-away the axis stays exactly still. The one
-approximation is the stop: a reversal within a substep is taken at that substep's end (the angle
-there is the linear update's), an error of at most one substep's travel at a reversal.
+approximation is the stop: it is taken at the end of the substep in which the speed reaches zero,
+at the angle where the speed, linear between the substep's ends, crosses zero (so the angle never
+steps back against the motion); an error within one substep's travel at each stop.
 With neither Coulomb nor stiction the axis is linear and the tick is one exact product.
 """
 
@@ -55,7 +56,12 @@ def tick(m: AxisMatrices, ax: MotorAxis, x0: np.ndarray, stuck: bool, volts: flo
                 return out, False
             n = int(stop[0]) + 1
             out[k:k + n] = traj[:n]
-            out[k + n - 1, 1] = 0.0
+            # the stop: speed 0, the angle where the speed (linear between the substep's ends)
+            # reaches 0, so the angle never steps back against the motion
+            _, w_prev, th_prev = traj[n - 2] if n > 1 else x
+            span = w_prev - traj[n - 1, 1]
+            frac = w_prev / span if span != 0.0 else 0.0
+            out[k + n - 1, 1:] = 0.0, th_prev + 0.5 * w_prev * frac * m.h
             stuck = abs(ke * out[k + n - 1, 0]) <= tb
         k += n
         x = out[k - 1]

@@ -52,6 +52,7 @@ class AxisMatrices:
     powers: np.ndarray  # (S, 3, 3): Ad^k, k = 1..S
     inputs: np.ndarray  # (S, 3, 2): sum_{j<k} Ad^j Bd, k = 1..S
     stuck_decay: np.ndarray  # (S,): a^k, k = 1..S
+    h: float  # the substep, s
 
     @classmethod
     def build(cls, ax: MotorAxis, h: float, substeps: int) -> "AxisMatrices":
@@ -64,4 +65,4 @@ class AxisMatrices:
             p = ad @ p
             powers[k], inputs[k] = p, g
         decay = np.exp(-h * ax.ra_ohm / ax.la_h * np.arange(1, substeps + 1))
-        return cls(powers, inputs, decay)
+        return cls(powers, inputs, decay, h)
