@@ -157,6 +157,8 @@ def cmd_job(args) -> dict:
     from nnik.commands.servo_job import cmd_servo_job, servo_target
 
     if (target := servo_target(args)) is not None:  # a dc_servo xy_table: the job closed loop
+        if not args.check:
+            check_job_outputs(check_model_dir(target[0], JOB_DIR), Path(args.job))
         return cmd_servo_job(args, target)
     if args.controller:
         raise NnikError("only a dc_servo xy_table's job has a controller", None, "--controller")
