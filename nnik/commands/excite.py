@@ -72,6 +72,7 @@ const int16_t nnik_excite_duties[NNIK_EXCITE_TICKS][2] PROGMEM = {{
 
 def run(args) -> None:
     from nnik.dynamics.servo.excite_plan import excite
+    from nnik.dynamics.servo.servo_error import ServoError
     from nnik.files.atomic_write import write_file_atomic
     from nnik.files.replace_dir import staged_folder
     from nnik.machine.scenario import load_scenario
@@ -86,7 +87,10 @@ def run(args) -> None:
                         f"{MAX_TABLE_BYTES} bytes of flash it may take; give fewer --seconds", None, "--seconds")
     out = Path(args.outdir) if args.outdir else Path(f"excite_{Path(args.scenario).stem}")
     ws = scn.workspace
-    ex = excite(cfg, tuple((lo * 1000.0, hi * 1000.0) for lo, hi in (ws.x_mm, ws.y_mm)), args.seconds, args.seed)
+    try:
+        ex = excite(cfg, tuple((lo * 1000.0, hi * 1000.0) for lo, hi in (ws.x_mm, ws.y_mm)), args.seconds, args.seed)
+    except ServoError as exc:
+        raise NnikError(str(exc), args.scenario) from None
     for name, a, p in zip("xy", ex.axes, ex.probes):
         print(f"{name}: step probe K {p.k_counts_s_v:.4g} counts/s/V, tau {p.tau_s:.4g} s -> square +-{a.amplitude_v:g} V, "
               f"half period {a.half_period_ticks} ticks ({a.half_period_ticks * cfg.tick_s:g} s), noise sigma "
