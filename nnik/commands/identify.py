@@ -71,7 +71,9 @@ def run(args) -> dict:
     out = Path(args.output) if args.output else src.with_name(src.stem + ".identified.toml")
     png = Path(args.png) if args.png else out.with_suffix(".png")
     check_output_file(out, [src], "the scenario lines")
-    check_output_file(png, [src, out], "the picture")
+    check_output_file(png, [src], "the picture")
+    if png.absolute() == out.absolute():
+        raise NnikError("--png and -o name the same file; the picture and the scenario lines need two", str(png))
     try:
         log = read_servo_log(src, args.supply, args.counts8)
         fits = fit_log(log)
