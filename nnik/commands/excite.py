@@ -16,7 +16,9 @@ from pathlib import Path
 from nnik.commands import common_options as co, option_types as opt
 from nnik.errors import NnikError
 
-HELP = "write the seed's identification excitation (square wave + Gaussian noise, sigma^2 = 0.3 x A) for a DC-servo table"
+HELP = ("write the seed's identification excitation for a DC-servo table: a square wave plus Gaussian noise "
+        "of variance sigma^2 = 0.3 x A, A the square's amplitude in volts (the seed's \"variance 30 per cent of the "
+        "amplitude\", read literally)")
 SECONDS = opt.Number(float, opt.between(1.0, 600.0, " s"))
 MARKER = ".nnik-excite"
 MAX_TABLE_BYTES = 24 * 1024  # the duty table in the Uno's 32 KiB of flash, beside the servo runtime
