@@ -170,3 +170,11 @@ def test_never_writes_over_its_log(tmp_path, good):
     before = src.read_bytes()
     one_error(nnik("identify", src, "-o", src), "input")
     assert src.read_bytes() == before
+
+
+def test_a_lag_under_half_a_tick_is_refused(tmp_path):
+    """A motor whose speed follows the volts within the tick: the log cannot show its tau."""
+    fast = excitation_log(900.0, 0.0008, 6.0, 400.0, noise_counts=0.5, seed=2, seconds=10)
+    src = tmp_path / "fast.csv"
+    src.write_text(log_text(fast.volts, fast.counts))
+    one_error(nnik("identify", src), "under half a tick", "log at a shorter tick")

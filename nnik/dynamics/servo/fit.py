@@ -116,9 +116,12 @@ def fit_axis(log: ServoLog, i: int) -> AxisFit:
         raise ServoError(f"axis {name}: the fitted gain K = {oe.k:.4g} counts/s/V is not positive: the encoder counts "
                         "against the motor's direction (swap the encoder's A and B, or the motor's leads)")
     lo, hi = tau_bounds(tick)
-    if not lo * 1.01 < oe.tau < hi * 0.99:
-        raise ServoError(f"axis {name}: the fitted tau {oe.tau:.4g} s sits at the search's edge ({lo:g}..{hi:g} s): "
-                        "the log shows no first-order lag (is it an open-loop excitation of this axis?)")
+    if not oe.tau > lo * 1.01:
+        raise ServoError(f"axis {name}: the speed's lag is under half a tick (tau fits {oe.tau:.3g} s at the search's "
+                         f"floor, {lo:g} s): the log's tick is too coarse to see it; log at a shorter tick")
+    if not oe.tau < hi * 0.99:
+        raise ServoError(f"axis {name}: tau fits {oe.tau:.4g} s at the search's ceiling ({hi:g} s): the log shows no "
+                         "first-order lag (is it an open-loop excitation of this axis?)")
     dt, dk = (Z95 * math.sqrt(max(float(oe.cov[j, j]), 0.0)) for j in (0, 1))
     model = SpeedModel(oe.k, oe.tau, (oe.k - dk, oe.k + dk), (oe.tau - dt, oe.tau + dt))
     k_rls, tau_rls = to_speed_model(theta, tick)
