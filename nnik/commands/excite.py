@@ -16,7 +16,9 @@ from pathlib import Path
 from nnik.commands import common_options as co, option_types as opt
 from nnik.errors import NnikError
 
-HELP = "write the seed's identification excitation (square wave + Gaussian noise, sigma^2 = 0.3 x A) for a DC-servo table"
+HELP = ("write the seed's identification excitation for a DC-servo table: a square wave plus Gaussian noise "
+        "of variance sigma^2 = 0.3 x A, A the square's amplitude in volts (the seed's \"variance 30 per cent of the "
+        "amplitude\", read literally)")
 SECONDS = opt.Number(float, opt.between(1.0, 600.0, " s"))
 MARKER = ".nnik-excite"
 MAX_TABLE_BYTES = 24 * 1024  # the duty table in the Uno's 32 KiB of flash, beside the servo runtime
@@ -72,6 +74,7 @@ const int16_t nnik_excite_duties[NNIK_EXCITE_TICKS][2] PROGMEM = {{
 
 def run(args) -> None:
     from nnik.dynamics.servo.excite_plan import excite
+    from nnik.dynamics.servo.servo_error import ServoError
     from nnik.files.atomic_write import write_file_atomic
     from nnik.files.replace_dir import staged_folder
     from nnik.machine.scenario import load_scenario
@@ -86,7 +89,10 @@ def run(args) -> None:
                         f"{MAX_TABLE_BYTES} bytes of flash it may take; give fewer --seconds", None, "--seconds")
     out = Path(args.outdir) if args.outdir else Path(f"excite_{Path(args.scenario).stem}")
     ws = scn.workspace
-    ex = excite(cfg, tuple((lo * 1000.0, hi * 1000.0) for lo, hi in (ws.x_mm, ws.y_mm)), args.seconds, args.seed)
+    try:
+        ex = excite(cfg, tuple((lo * 1000.0, hi * 1000.0) for lo, hi in (ws.x_mm, ws.y_mm)), args.seconds, args.seed)
+    except ServoError as exc:
+        raise NnikError(str(exc), args.scenario) from None
     for name, a, p in zip("xy", ex.axes, ex.probes):
         print(f"{name}: step probe K {p.k_counts_s_v:.4g} counts/s/V, tau {p.tau_s:.4g} s -> square +-{a.amplitude_v:g} V, "
               f"half period {a.half_period_ticks} ticks ({a.half_period_ticks * cfg.tick_s:g} s), noise sigma "

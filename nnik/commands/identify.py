@@ -63,6 +63,7 @@ def run(args) -> dict:
     from nnik.dynamics.servo.fit import fit_log
     from nnik.dynamics.servo.log_csv import read_servo_log
     from nnik.dynamics.servo.predict import predict_counts
+    from nnik.dynamics.servo.servo_error import ServoError
     from nnik.files.atomic_write import write_file_atomic
     from nnik.files.output_path import check_output_file
 
@@ -70,11 +71,13 @@ def run(args) -> dict:
     out = Path(args.output) if args.output else src.with_name(src.stem + ".identified.toml")
     png = Path(args.png) if args.png else out.with_suffix(".png")
     check_output_file(out, [src], "the scenario lines")
-    check_output_file(png, [src, out], "the picture")
+    check_output_file(png, [src], "the picture")
+    if png.absolute() == out.absolute():
+        raise NnikError("--png and -o name the same file; the picture and the scenario lines need two", str(png))
     try:
         log = read_servo_log(src, args.supply, args.counts8)
         fits = fit_log(log)
-    except NnikError as exc:
+    except ServoError as exc:
         raise NnikError(str(exc), str(src)) from None
     print(f"{src}: {len(log.t)} samples, tick {log.tick_s * 1000:.4g} ms ({log.t[-1] - log.t[0]:.4g} s)")
     for f in fits:

@@ -36,12 +36,16 @@ def identify(scn, seed: int):
     from nnik.dynamics.servo.excite_plan import excite
     from nnik.dynamics.servo.fit import fit_log
     from nnik.dynamics.servo.log_csv import ServoLog
+    from nnik.dynamics.servo.servo_error import ServoError
 
     cfg, ws = scn.servo, scn.workspace
-    ex = excite(cfg, tuple((lo * 1000.0, hi * 1000.0) for lo, hi in (ws.x_mm, ws.y_mm)), EXCITE_S, seed)
-    t = np.arange(len(ex.duty)) * cfg.tick_s
-    log = ServoLog(t, ex.duty * (cfg.supply_v / cfg.duty_max), ex.counts.astype(float), cfg.tick_s, None)
-    return fit_log(log)
+    try:  # a plant nnik cannot excite or fit: one line (ServoError is nnik.dynamics' own)
+        ex = excite(cfg, tuple((lo * 1000.0, hi * 1000.0) for lo, hi in (ws.x_mm, ws.y_mm)), EXCITE_S, seed)
+        t = np.arange(len(ex.duty)) * cfg.tick_s
+        log = ServoLog(t, ex.duty * (cfg.supply_v / cfg.duty_max), ex.counts.astype(float), cfg.tick_s, None)
+        return fit_log(log)
+    except ServoError as exc:
+        raise NnikError(f"identifying the plant: {exc}", scn.source) from None
 
 
 def run_servo(scn, out: Path, say=print, use_chip: bool | None = None) -> dict:

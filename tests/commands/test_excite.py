@@ -78,6 +78,11 @@ def test_the_duty_table_builds_for_the_uno(excited, tmp_path):
     sym = subprocess.run(["avr-nm", "-S", str(obj)], capture_output=True, text=True, check=True).stdout
     size = next(int(ln.split()[1], 16) for ln in sym.splitlines() if ln.endswith(" nnik_excite_duties"))
     assert size == 2000 * 2 * 2
+    raw = tmp_path / "table.bin"  # the flash image of the table: the duties of duty.csv, row by row
+    subprocess.run(["avr-objcopy", "-O", "binary", "-j", ".progmem.data", str(obj), str(raw)], check=True)
+    table = np.frombuffer(raw.read_bytes(), dtype="<i2").reshape(-1, 2)
+    duty = np.loadtxt(out / "duty.csv", delimiter=",", skiprows=1)[:, 1:]
+    assert (table == duty).all()
 
 
 def test_bad_input(tmp_path):

@@ -161,6 +161,7 @@ def test_duty_out_of_range_and_missing_file(tmp_path, good):
     one_error(nnik("identify", src, "--supply", 12), "duty fractions in [-1, 1]")
     one_error(nnik("identify", tmp_path / "nope.csv"), "file not found")
     one_error(nnik("identify", src, "--supply", "-3"), "--supply")
+    one_error(nnik("identify", src, "-o", tmp_path / "a.toml", "--png", tmp_path / "a.toml"), "the same file")
 
 
 def test_never_writes_over_its_log(tmp_path, good):

@@ -23,7 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from nnik.dynamics.servo.excitation import AxisExcitation, duties
-from nnik.errors import NnikError
+from nnik.dynamics.servo.servo_error import ServoError
 
 PROBE_S = 2.0
 PROBE_FRACTION = 0.5
@@ -73,7 +73,7 @@ def probe(cfg) -> tuple[Probe, Probe]:
     for i, name in enumerate(AXES):
         v_ss = float(speed[-max(int(PROBE_TAIL * n), 1):, i].mean())
         if not v_ss > 0:
-            raise NnikError(f"axis {name} does not move at {volts:.3g} V (half the supply) in the scenario's plant: its "
+            raise ServoError(f"axis {name} does not move at {volts:.3g} V (half the supply) in the scenario's plant: its "
                             "friction holds it, and the excitation's square is no larger")
         k_hit = int(np.argmax(speed[:, i] >= (1 - math.exp(-1)) * v_ss))
         out.append(Probe(v_ss / volts, max((k_hit + 0.5) * cfg.tick_s, cfg.tick_s)))
@@ -90,7 +90,7 @@ def plan(cfg, stroke_counts: tuple[float, float], probes: tuple[Probe, Probe]) -
         if swing > room:
             amp *= room / swing
         if amp < MIN_AMPLITUDE_V:
-            raise NnikError(f"axis {name}: a square of {MIN_AMPLITUDE_V:g} V for {half} ticks would swing "
+            raise ServoError(f"axis {name}: a square of {MIN_AMPLITUDE_V:g} V for {half} ticks would swing "
                             f"{p.k_counts_s_v * MIN_AMPLITUDE_V * half * cfg.tick_s / 2:.0f} counts each side, more "
                             f"than the stroke allows ({room:.0f})")
         axes.append(AxisExcitation(round(amp, 3), half))
@@ -115,6 +115,6 @@ def excite(cfg, workspace_um: tuple[tuple[float, float], tuple[float, float]], s
     for i, name in enumerate(AXES):
         lo, hi = workspace_um[i]
         if table[:, i].min() < lo or table[:, i].max() > hi:
-            raise NnikError(f"the excitation drives {name} out of its stroke ({table[:, i].min() / 1000:.1f} to "
+            raise ServoError(f"the excitation drives {name} out of its stroke ({table[:, i].min() / 1000:.1f} to "
                             f"{table[:, i].max() / 1000:.1f} mm of {lo / 1000:g}..{hi / 1000:g}); give fewer --seconds")
     return Excitation(axes, probes, duty, counts, table, start)

@@ -19,7 +19,7 @@ Confidence intervals, 95 % (normal quantile 1.96): estimate +- 1.96 standard err
 output-error fit's HAC (Newey-West) covariance. They say how well the log pins the model down, not
 how well a first-order model fits a plant with stiction or backlash (speed_fit says that).
 
-Per axis the log is refused (NnikError, one line) when the input never changes (no excitation),
+Per axis the log is refused (ServoError, one line) when the input never changes (no excitation),
 the duty is saturated at every sample, the counts never change (the axis did not move), the
 regressors are too collinear to fit (MAX_CONDITION), the gain is not positive (the encoder counts
 against the motor's direction), or tau sits at the search's edge (no first-order lag in the log).
@@ -37,7 +37,7 @@ from nnik.dynamics.servo.log_csv import ServoLog
 from nnik.dynamics.servo.output_error import fit_output_error, tau_bounds
 from nnik.dynamics.servo.rls import rls
 from nnik.dynamics.servo.speed_model import DiscreteModel, SpeedModel
-from nnik.errors import NnikError
+from nnik.dynamics.servo.servo_error import ServoError
 
 Z95 = 1.959963984540054
 MAX_CONDITION = 1e7  # of the column-scaled regressor matrix
@@ -76,12 +76,12 @@ def _check_input(log: ServoLog, i: int) -> None:
     name = AXES[i]
     u = log.volts[:, i]
     if np.ptp(u) == 0:
-        raise NnikError(f"no excitation on {name}: u_{name} is {u[0]:g} V at every sample")
+        raise ServoError(f"no excitation on {name}: u_{name} is {u[0]:g} V at every sample")
     if log.duty is not None and (np.abs(log.duty[:, i]) >= 1.0).all():
-        raise NnikError(f"u_{name} is saturated (|duty| = 1) at every sample: nothing but the supply's sign "
+        raise ServoError(f"u_{name} is saturated (|duty| = 1) at every sample: nothing but the supply's sign "
                         "excites the axis; lower the excitation's amplitude")
     if np.ptp(log.counts[:, i]) == 0:
-        raise NnikError(f"count_{name} never changes: axis {name} did not move (no power, or the excitation is "
+        raise ServoError(f"count_{name} never changes: axis {name} did not move (no power, or the excitation is "
                         "below what breaks friction away)")
 
 
@@ -95,12 +95,12 @@ def seed_fit(dp: np.ndarray, u: np.ndarray, name: str) -> tuple[np.ndarray, np.n
     phi, y = regressors(dp, u)
     ls = batch_ls(phi, y)
     if not ls.condition < MAX_CONDITION:
-        raise NnikError(f"no excitation on {name}: the log does not excite the axis enough to fit its model "
+        raise ServoError(f"no excitation on {name}: the log does not excite the axis enough to fit its model "
                         f"(regressors' condition number {ls.condition:.3g}); excite it with `nnik excite`'s square "
                         "wave plus noise")
     theta = rls(phi, y).theta
     if not all(_close(float(p), float(q)) for p, q in zip(theta, ls.theta)):
-        raise NnikError(f"axis {name}: recursive and batch least squares disagree (a {theta[0]:.6g} against "
+        raise ServoError(f"axis {name}: recursive and batch least squares disagree (a {theta[0]:.6g} against "
                         f"{ls.theta[0]:.6g}): the log is numerically too poor to fit")
     return theta, ls.theta
 
@@ -113,11 +113,11 @@ def fit_axis(log: ServoLog, i: int) -> AxisFit:
     theta, theta_ls = seed_fit(dp, u, name)
     oe = fit_output_error(dp, u, tick)
     if not oe.k > 0:
-        raise NnikError(f"axis {name}: the fitted gain K = {oe.k:.4g} counts/s/V is not positive: the encoder counts "
+        raise ServoError(f"axis {name}: the fitted gain K = {oe.k:.4g} counts/s/V is not positive: the encoder counts "
                         "against the motor's direction (swap the encoder's A and B, or the motor's leads)")
     lo, hi = tau_bounds(tick)
     if not lo * 1.01 < oe.tau < hi * 0.99:
-        raise NnikError(f"axis {name}: the fitted tau {oe.tau:.4g} s sits at the search's edge ({lo:g}..{hi:g} s): "
+        raise ServoError(f"axis {name}: the fitted tau {oe.tau:.4g} s sits at the search's edge ({lo:g}..{hi:g} s): "
                         "the log shows no first-order lag (is it an open-loop excitation of this axis?)")
     dt, dk = (Z95 * math.sqrt(max(float(oe.cov[j, j]), 0.0)) for j in (0, 1))
     model = SpeedModel(oe.k, oe.tau, (oe.k - dk, oe.k + dk), (oe.tau - dt, oe.tau + dt))

@@ -26,8 +26,9 @@ def model_duties(controller, rows) -> np.ndarray:
     return np.array([controller.tick((int(r[0]), int(r[1])), (int(r[2]), int(r[3]))) for r in rows], dtype=np.int64)
 
 
-def host_duties(controller, rows, cc: str = "gcc") -> np.ndarray:
-    """The controller's C compiled on the host: its duty per row, from a reset."""
+def host_duties(controller, rows, cc: str = "gcc", reset_before: tuple[int, ...] = ()) -> np.ndarray:
+    """The controller's C compiled on the host: its duty per row, from a reset (and a reset before
+    each row index in reset_before)."""
     if shutil.which(cc) is None:
         raise NnikError(f"host C compiler {cc!r} not found")
     with tempfile.TemporaryDirectory() as tmp:
@@ -38,7 +39,8 @@ def host_duties(controller, rows, cc: str = "gcc") -> np.ndarray:
                             *map(str, srcs), "-o", str(exe)], capture_output=True, text=True)
         if r.returncode != 0:
             raise NnikError(f"host build of the {controller.kind} controller failed: {r.stderr.strip()[:400]}")
-        stdin = "".join(f"{a} {b} {c} {e}\n" for a, b, c, e in np.asarray(rows, dtype=np.int64).tolist())
+        stdin = "".join(("r\n" if k in reset_before else "") + f"{a} {b} {c} {e}\n"
+                        for k, (a, b, c, e) in enumerate(np.asarray(rows, dtype=np.int64).tolist()))
         run = subprocess.run([str(exe)], input=stdin, capture_output=True, text=True,
                              env=dict(os.environ, ASAN_OPTIONS="detect_leaks=0"))
     if run.returncode != 0:

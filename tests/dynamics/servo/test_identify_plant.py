@@ -16,7 +16,7 @@ from nnik.dynamics.servo.excite_plan import excite
 from nnik.dynamics.servo.fit import fit_axis
 from nnik.dynamics.servo.log_csv import ServoLog
 from nnik.dynamics.servo.nominal import equivalent_tau_s, nominal_model
-from nnik.errors import NnikError
+from nnik.dynamics.servo.servo_error import ServoError
 from tests.dynamics.servo.plants import configs
 
 WIDE = ((-5e6, 5e6), (-5e6, 5e6))  # a 10 m stroke: the fastest random motors swing far
@@ -26,7 +26,7 @@ SETTINGS = settings(max_examples=12, deadline=None, suppress_health_check=[Healt
 def _fits(cfg, seed):
     try:
         ex = excite(cfg, WIDE, 20.0, seed)
-    except NnikError as exc:
+    except ServoError as exc:
         assume("friction holds it" not in str(exc))
         raise
     n = len(ex.duty)
