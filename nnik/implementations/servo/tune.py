@@ -29,9 +29,9 @@ LIMIT_PENALTY = 1e6
 
 
 def evaluate(kind: str, gains: dict, cfg, models, ref_counts, max_overshoot_um: float = 25.0,
-             max_saturated_fraction: float = 0.05) -> dict:
+             max_saturated_fraction: float = 0.05, coulomb_v=(0.0, 0.0)) -> dict:
     """The run's figures and its objective for one set of gains."""
-    pos, duty = simulate_model(cfg, models, make(kind, gains, cfg), ref_counts)
+    pos, duty = simulate_model(cfg, models, make(kind, gains, cfg), ref_counts, coulomb_v)
     s = score_run(cfg, ref_counts, pos, duty)
     excess = (max(0.0, s["overshoot_um"] / max_overshoot_um - 1.0)
               + max(0.0, s["final_error_um"] / max_overshoot_um - 1.0)
@@ -42,8 +42,9 @@ def evaluate(kind: str, gains: dict, cfg, models, ref_counts, max_overshoot_um: 
 
 
 def tune(kind: str, cfg, models, ref_counts, trials: int, seed: int, max_overshoot_um: float = 25.0,
-         max_saturated_fraction: float = 0.05) -> dict:
-    """The best gains (physical units, exactly what the chip runs) after `trials` trials."""
+         max_saturated_fraction: float = 0.05, coulomb_v=(0.0, 0.0)) -> dict:
+    """The best gains (physical units, exactly what the chip runs) after `trials` trials; coulomb_v:
+    the identified Coulomb friction per axis, volts (model_loop.py), 0 for a linear model."""
     import optuna
 
     if kind not in KINDS:
@@ -56,10 +57,13 @@ def tune(kind: str, cfg, models, ref_counts, trials: int, seed: int, max_oversho
     if not (max_overshoot_um > 0 and max_saturated_fraction > 0):
         raise NnikError("max_overshoot_um and max_saturated_fraction must be positive")
     models = tuple(models)
+    coulomb_v = tuple(float(c) for c in coulomb_v)
+    if len(coulomb_v) != 2 or not all(c >= 0 for c in coulomb_v):
+        raise NnikError(f"coulomb_v must be two non-negative volts, not {coulomb_v!r}")
 
     def objective(trial) -> float:
         g = suggest(kind, trial, cfg, models)
-        s = evaluate(kind, g, cfg, models, ref, max_overshoot_um, max_saturated_fraction)
+        s = evaluate(kind, g, cfg, models, ref, max_overshoot_um, max_saturated_fraction, coulomb_v)
         trial.set_user_attr("gains", g)
         return s["objective"]
 

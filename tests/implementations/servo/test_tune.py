@@ -70,3 +70,37 @@ def test_bad_tuning_requests_are_one_error(setup):
         tune("pid", cfg, models, paths["corner"], 0, 1)
     with pytest.raises(NnikError, match="unknown controller kind"):
         tune("lqr", cfg, models, paths["corner"], 3, 1)
+
+
+def test_the_tuning_model_sticks_below_its_coulomb_friction(setup):
+    """With the identified Coulomb friction (volts), a duty below it leaves the axis at rest and a
+    moving axis that friction stops does not reverse; without it the same duty moves the axis."""
+    from nnik.implementations.servo.model_loop import simulate_model
+
+    cfg, models, _ = setup
+
+    class Hold:
+        def __init__(self, duty):
+            self.duty = duty
+
+        def reset(self):
+            pass
+
+        def tick(self, ref, pos):
+            return self.duty
+
+    ref = [[0, 0]] * 50
+    weak = round(0.9 * cfg.duty_max / cfg.supply_v)  # 0.9 V
+    pos, _ = simulate_model(cfg, models, Hold((weak, -weak)), ref, coulomb_v=(1.0, 1.0))
+    assert (pos == 0.5).all()
+    pos, _ = simulate_model(cfg, models, Hold((weak, -weak)), ref)
+    assert pos[-1, 0] > 100 and pos[-1, 1] < -100
+
+    class Coast(Hold):
+        def tick(self, ref, pos):
+            self.k = getattr(self, "k", -1) + 1
+            return (cfg.duty_max, 0) if self.k < 20 else (0, 0)
+
+    pos, _ = simulate_model(cfg, models, Coast(None), ref, coulomb_v=(2.0, 0.0))
+    assert (pd := pos[:, 0])[-1] > pd[20] and (pd[1:] >= pd[:-1]).all()  # stops, never runs back
+    assert pd[-1] == pd[-5]
