@@ -39,6 +39,7 @@
 #include <simavr/sim_irq.h>
 #include <simavr/sim_cycle_timers.h>
 #include <simavr/avr_ioport.h>
+#include <simavr/avr_extint.h>
 
 #define CLOCK_HZ 16000000UL
 #define VEC_BYTES 4      /* the ATmega328P's vector slot: a jmp, 4 bytes */
@@ -126,8 +127,8 @@ static int step(void)
     uint64_t c0 = avr->cycle;
     int running = avr->state == cpu_Running;
     int rc = avr_run(avr);
-    if (running)
-        awake += avr->cycle - c0;
+    if (running) /* a SLEEP's step also skips the slept cycles: only its own cycle is awake */
+        awake += avr->state == cpu_Running ? avr->cycle - c0 : 1;
     while (depth && sp_now() > frames[depth - 1].sp) { /* reti: the frame's return address popped */
         struct frame *f = &frames[--depth];
         uint64_t d = avr->cycle - f->start;
@@ -194,6 +195,12 @@ static int32_t duty_of(int reg, int com, int dir_reg, int dir_bit)
     return (avr->data[dir_reg] >> dir_bit) & 1 ? -d : d;
 }
 
+static void no_host_sleep(avr_t *a, avr_cycle_count_t how_long)
+{
+    (void)a;
+    (void)how_long; /* simavr skips the slept cycles; nothing to wait for on the host */
+}
+
 static int cmp_edge(const void *a, const void *b)
 {
     const struct edge *x = a, *y = b;
@@ -218,6 +225,9 @@ static void load(const char *path)
     }
     avr_init(avr);
     avr->frequency = CLOCK_HZ;
+    avr->sleep = no_host_sleep;
+    for (i = 0; i < 2; i++) /* INT0/INT1 (PD2, PD3: PWM Y) are never enabled: no polling of their low level */
+        avr_extint_set_strict_lvl_trig(avr, (uint8_t)i, 0);
     avr_load_firmware(avr, &fw);
     for (i = 0; i < 4; i++)
         pin_c[i] = avr_io_getirq(avr, AVR_IOCTL_IOPORT_GETIRQ('C'), i);
