@@ -25,9 +25,12 @@
  * the wake-up included) to the cycle its reti returns (the stack pointer back above its entry).
  *
  * usage 2 (the edge-rate sweep): nnik_simavr_servo -r RATE TICKS FIRMWARE.elf PERIOD COUNT
- *   both axes move forward at RATE edges/s each (Y half an edge interval after X), the edges
- *   running through the ticks' computations, for TICKS ticks; then the edges stop, one more tick
- *   runs, and it prints "edges N counted X Y awake_max A": lost counts are N - X, N - Y.
+ *   after tick 0, both axes move forward at RATE edges/s each (Y half an edge interval after X),
+ *   the edges running through the ticks' computations, for TICKS ticks; then the edges stop, two
+ *   more ticks run, and it prints "edges N counted X Y awake_max A late_max L": lost counts are
+ *   N - X, N - Y; A the most awake cycles in one tick period; L the latest a tick's computation
+ *   ended after its due time (the whole run when a tick was starved: the encoder interrupt has
+ *   the higher priority).
  */
 #include <stdio.h>
 #include <stdlib.h>
@@ -249,8 +252,8 @@ static void boot(void)
 static int sweep(int argc, char **argv)
 {
     double rate;
-    long ticks, k;
-    uint64_t period, t0, t_end, gap, n = 0, awake_max = 0;
+    long ticks, done = 0;
+    uint64_t period, t0, t_end, gap, n = 0, awake_max = 0, win_end, late_max = 0, first;
     unsigned count;
     if (argc != 7) {
         fprintf(stderr, "usage: %s -r RATE TICKS FIRMWARE.elf PERIOD COUNT\n", argv[0]);
@@ -262,30 +265,45 @@ static int sweep(int argc, char **argv)
     count = (unsigned)strtoul(argv[6], NULL, 0);
     load(argv[4]);
     boot();
-    gap = (uint64_t)(CLOCK_HZ / rate);
+    run_tick();                     /* tick 0, before any edge */
+    first = tick_entry;
+    gap = (uint64_t)(CLOCK_HZ / rate + 0.5);
     if (gap < 2 || ticks < 1) {
         fprintf(stderr, "rate too high or no ticks\n");
         return 2;
     }
     t0 = avr->cycle + GUARD;
-    t_end = t0 + (uint64_t)ticks * period;
+    t_end = first + (uint64_t)(ticks + 1) * period - GUARD;
     n_edges = 0;
     for (n = 0; t0 + n * gap + gap / 2 < t_end && 2 * n + 2 <= MAX_EDGES; n++) {
         edges[n_edges++] = (struct edge){t0 + n * gap, 0, 1};
         edges[n_edges++] = (struct edge){t0 + n * gap + gap / 2, 1, 1};
     }
     schedule();
-    for (k = 0; k <= ticks + 1; k++) {
-        awake = 0;
-        run_tick();
-        if (awake > awake_max && k > 0 && k <= ticks)
-            awake_max = awake;
-    }
-    while (next_edge < n_edges) /* the last edges before the extra tick */
+    awake = 0;
+    win_end = first + period;
+    while (avr->cycle < t_end) {
+        tick_done = 0;
         step();
+        if (tick_done) {            /* tick 1 + done: due at first + (1 + done) * period */
+            uint64_t late = tick_end - (first + (uint64_t)(1 + done) * period);
+            done++;
+            if (late > late_max)
+                late_max = late;
+        }
+        if (avr->cycle >= win_end) { /* the awake cycles of each tick period */
+            if (awake > awake_max)
+                awake_max = awake;
+            awake = 0;
+            win_end += period;
+        }
+    }
+    if (done < ticks) /* starved ticks: as late as the run */
+        late_max = avr->cycle - first;
     run_tick();
-    fprintf(out, "edges %llu counted %d %d awake_max %llu\n", (unsigned long long)n, rd32(count), rd32(count + 4),
-           (unsigned long long)awake_max);
+    run_tick();
+    fprintf(out, "edges %llu counted %d %d awake_max %llu late_max %llu\n", (unsigned long long)n, rd32(count),
+            rd32(count + 4), (unsigned long long)awake_max, (unsigned long long)late_max);
     fflush(out);
     return 0;
 }
