@@ -25,7 +25,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from nnik.errors import NnikError
+from nnik.dynamics.servo.servo_error import ServoError
 
 
 @dataclass(frozen=True)
@@ -64,14 +64,14 @@ class SpeedModel:
 
     def __post_init__(self):
         if not (math.isfinite(self.k_counts_s_v) and self.k_counts_s_v > 0):
-            raise NnikError(f"speed model: K must be a positive number of counts/s/V, not {self.k_counts_s_v!r}")
+            raise ServoError(f"speed model: K must be a positive number of counts/s/V, not {self.k_counts_s_v!r}")
         if not (math.isfinite(self.tau_s) and self.tau_s > 0):
-            raise NnikError(f"speed model: tau must be a positive number of seconds, not {self.tau_s!r}")
+            raise ServoError(f"speed model: tau must be a positive number of seconds, not {self.tau_s!r}")
 
     def discrete(self, tick_s: float) -> DiscreteModel:
         """The exact (zero-order hold) discretisation at tick_s: the position transfer function."""
         if not (math.isfinite(tick_s) and tick_s > 0):
-            raise NnikError(f"speed model: the tick must be a positive number of seconds, not {tick_s!r}")
+            raise ServoError(f"speed model: the tick must be a positive number of seconds, not {tick_s!r}")
         a = math.exp(-tick_s / self.tau_s)
         k, tau = self.k_counts_s_v, self.tau_s
         return DiscreteModel(tick_s, a, k * (tick_s - tau * (1.0 - a)), k * (tau * (1.0 - a) - a * tick_s))

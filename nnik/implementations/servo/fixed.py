@@ -18,6 +18,8 @@ Formats (chosen by range analysis; docs/closed_loop.md "Controllers"):
 
 from __future__ import annotations
 
+import math
+
 from nnik.errors import NnikError
 
 I16 = 32767
@@ -54,8 +56,7 @@ def quantise(name: str, value: float, frac_bits: int) -> int:
         v = float(value)
     except (TypeError, ValueError):
         raise NnikError(f"controller gain {name} must be a number, not {value!r}") from None
-    q = round(v * (1 << frac_bits))
-    if not (v == v) or v < 0 or q > U16:
-        top = U16 / (1 << frac_bits)
+    top = U16 / (1 << frac_bits)
+    if not math.isfinite(v) or v < 0 or round(v * (1 << frac_bits)) > U16:
         raise NnikError(f"controller gain {name} = {value!r} is outside its format's range 0 .. {top:.6g}")
-    return q
+    return round(v * (1 << frac_bits))

@@ -6,7 +6,7 @@ from hypothesis import given, settings, strategies as st
 from scipy.signal import cont2discrete, dlsim
 
 from nnik.dynamics.servo.speed_model import SpeedModel
-from nnik.errors import NnikError
+from nnik.dynamics.servo.servo_error import ServoError
 
 
 @settings(max_examples=30, deadline=None)
@@ -35,5 +35,5 @@ def test_steady_speed_is_k_volts():
 
 @pytest.mark.parametrize("k,tau", [(0, 0.1), (-5, 0.1), (100, 0), (100, float("nan"))])
 def test_nonsense_is_refused(k, tau):
-    with pytest.raises(NnikError):
+    with pytest.raises(ServoError):
         SpeedModel(k, tau)
