@@ -78,6 +78,7 @@ def print_servo_job(res: dict) -> None:
         print(f"chip: not run ({chip['not_run']})")
     else:
         print(f"controller cycles per tick: max {chip['controller_cycles_max']}")
-        print(f"cycles per tick (encoder interrupts included): max {chip['tick_cycles_max']}")
+        print(f"cycles per tick, the tick and the encoder interrupts: max {chip['tick_cycles_max']} of "
+              f"{chip['period_cycles']} ({chip['cpu_pct_max']:.1f} % CPU)")
         print(f"mismatch {chip['mismatches']}")
     print(f"plot: {res['png']}")

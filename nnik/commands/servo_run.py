@@ -57,8 +57,8 @@ def run_servo(scn, out: Path, say=print, use_chip: bool | None = None) -> dict:
     from nnik.job.servo_dir import GAINS_FILE, IDENTIFIED_FILE, SCENARIO_FILE, ServoDir
 
     t0 = time.perf_counter()
-    ctl = scn.controller or {}
-    seed, trials = int(ctl.get("seed", 1)), int(ctl.get("tune_trials", 60))
+    ctl = scn.controller  # [controller] with its defaults
+    seed, trials, limits = ctl["seed"], ctl["tune_trials"], ctl
     (out / "servo").mkdir(parents=True, exist_ok=True)
     shutil.copyfile(scn.source, out / SCENARIO_FILE)
     fits = identify(scn, seed)
@@ -71,46 +71,52 @@ def run_servo(scn, out: Path, say=print, use_chip: bool | None = None) -> dict:
     _, ref = job_reference(JobRequest(JOBS / REFERENCE_JOB, scn))
     gains = {}
     for kind in KINDS:
-        gains[kind] = tune(kind, scn.servo, models, ref.counts, trials, seed)
+        gains[kind] = tune(kind, scn.servo, models, ref.counts, trials, seed, limits["max_overshoot_um"],
+                           limits["max_saturated_fraction"], tuple(f.coulomb_v for f in fits))
         say(f"tuned {kind} on {REFERENCE_JOB} against the identified model ({trials} trials): {gains[kind]}")
     model = ServoDir(out, scn, KINDS[0], gains)
     results = {}
     for job in TESTS:
         req = JobRequest(JOBS / job, scn)
         results[job] = {k: ClosedLoopJob(k, False, tag=k).run(model, req) for k in KINDS}
-    best = min(KINDS, key=lambda k: results[REFERENCE_JOB][k]["contour_um"]["rms_um"])
+    lowest = min(KINDS, key=lambda k: results[REFERENCE_JOB][k]["contour_um"]["rms_um"])
+    best = lowest if ctl["kind"] == "auto" else ctl["kind"]
     data = {"chosen": best, "gains": gains, "reference_job": REFERENCE_JOB, "trials": trials, "seed": seed}
     (out / GAINS_FILE).write_text(json.dumps(data, indent=2) + "\n")  # last: a model dir only once it is whole
-    say(f"default controller: {best} (the lowest RMS contour error on {REFERENCE_JOB}: "
-        f"{results[REFERENCE_JOB][best]['contour_um']['rms_um']:.1f} um)")
+    why = (f"the lowest RMS contour error on {REFERENCE_JOB}" if best == lowest else
+           f"[controller] kind; the lowest RMS contour error on {REFERENCE_JOB} is {lowest}'s")
+    say(f"default controller: {best} ({why}: {results[REFERENCE_JOB][best]['contour_um']['rms_um']:.1f} um)")
     from nnik.implementations.servo.emit_c import write_controller_c
 
     write_controller_c(model.controller(best), out / "c", f"nnik run {scn.source}: {best}, the default controller")
     say(f"C of {best}: {out / 'c'}/ (nnik_servo_config.h with its gains, the controllers' sources)")
-    chip = _chip(out, scn, best, use_chip, say)
+    model = ServoDir(out, scn, best, gains)
+    chip = _chip(out, scn, model, use_chip, say)
     md = write_report(out, scn, fits, gains, best, results, chip)
     say(f"report: {md}")
     return {"chosen": best, "results": results, "chip": chip, "seconds": time.perf_counter() - t0}
 
 
-def _chip(out: Path, scn, best: str, use_chip: bool | None, say) -> dict:
-    """The chosen controller's C on the simulated Uno, every test closed loop, chip = model."""
+def _chip(out: Path, scn, model, use_chip: bool | None, say) -> dict:
+    """Every controller's C on the simulated Uno, every test closed loop, chip = model tick by tick
+    (the chosen controller last, so OUTDIR/job/TEST.json are its figures)."""
     from nnik.job.closed_loop import ClosedLoopJob
     from nnik.job.parse import JobRequest
-    from nnik.job.servo_dir import ServoDir
     from nnik.job.servo_loop import chip_missing
 
     why = chip_missing()
     if use_chip is False or why:
         say(f"chip: not run ({'not asked' if use_chip is False else why})")
         return {"not_run": "not asked" if use_chip is False else why}
-    model = ServoDir.load(out, scn)
     res = {}
-    for job in TESTS:
-        r = ClosedLoopJob(best, True).run(model, JobRequest(JOBS / job, scn))["chip"]
-        res[job] = r
-        say(f"chip {best} on {job}: mismatch {r['mismatches']}, controller cycles per tick: max "
-            f"{r['controller_cycles_max']}")
-        if r["mismatches"]:
-            raise NnikError(f"the chip's duty differs from the model's at {r['mismatches']} ticks on {job}")
+    for kind in sorted(KINDS, key=lambda k: k == model.chosen):
+        for job in TESTS:
+            r = ClosedLoopJob(kind, True).run(model, JobRequest(JOBS / job, scn))["chip"]
+            res.setdefault(kind, {})[job] = r
+            if r["mismatches"]:
+                raise NnikError(f"the chip's {kind} duty differs from the model's at {r['mismatches']} ticks on {job}")
+        worst = max(res[kind].values(), key=lambda r: r["tick_cycles_max"])
+        say(f"chip {kind}: mismatch 0 on every test; controller cycles per tick: max "
+            f"{max(r['controller_cycles_max'] for r in res[kind].values())}; the tick with the encoder interrupts: "
+            f"max {worst['tick_cycles_max']} cycles ({worst['cpu_pct_max']:.1f} % CPU)")
     return res

@@ -42,6 +42,24 @@ def loop(ref: Reference, cfg, controller, work: Path, use_chip: bool | None) -> 
     if why:
         raise NnikError(f"avr: {why}")
     from nnik.firmware.servo import cosim
+    from nnik.firmware.servo.build import build_firmware
+    from nnik.targets.toolchain import TargetError
 
-    co = cosim.run(cosim.build(cfg, controller, work), cfg, controller, ref.counts)
-    return Looped(trace, cosim.figures(co))
+    try:
+        fw = build_firmware(controller, cfg.tick_s, work)
+        co = cosim.run(fw, cfg, controller, ref.counts, work, start_counts=tuple(int(c) for c in ref.counts[0]))
+    except TargetError as exc:
+        raise NnikError(f"avr: {exc}") from None
+    return Looped(trace, chip_figures(co, fw, trace))
+
+
+def chip_figures(co, fw, trace: Trace) -> dict:
+    """What the chip did: its duty against the model's (mismatches), the plant it drove against the
+    Python loop's (the same motion when chip = model and no edge is lost), cycles and load."""
+    return {"mismatches": co.mismatches, "first_mismatch_tick": int(co.mismatch_ticks[0]) if co.mismatches else None,
+            "lost_count_ticks": co.lost_counts,
+            "same_motion_as_the_model": bool((co.plant_counts == trace.counts).all()),
+            "controller_cycles_max": co.cycles_max, "tick_isr_cycles_max": int(co.tick_isr_cycles.max()),
+            "tick_cycles_max": int(co.awake_cycles.max()), "encoder_isrs_max": int(co.enc_isrs.max()),
+            "cpu_pct_max": co.load_pct_max, "period_cycles": co.period_cycles,
+            "flash_bytes": fw.flash_bytes, "ram_bytes": fw.ram_bytes}
