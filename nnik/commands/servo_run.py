@@ -73,7 +73,8 @@ def run_servo(scn, out: Path, say=print, use_chip: bool | None = None) -> dict:
     for kind in KINDS:
         gains[kind] = tune(kind, scn.servo, models, ref.counts, trials, seed, limits["max_overshoot_um"],
                            limits["max_saturated_fraction"], tuple(f.coulomb_v for f in fits))
-        say(f"tuned {kind} on {REFERENCE_JOB} against the identified model ({trials} trials): {gains[kind]}")
+        say(f"tuned {kind} on {REFERENCE_JOB} against the identified model ({trials} trials): "
+            + ", ".join(f"{k} {v:.4g}" for k, v in gains[kind].items()))
     model = ServoDir(out, scn, KINDS[0], gains)
     results = {}
     for job in TESTS:
