@@ -58,7 +58,8 @@ def run_one(run: Path, cfg, work: Path, jobs=JOBS) -> dict:
     from nnik.firmware.arduino import export_arduino
     from nnik.firmware.gcode import chip
     from nnik.firmware.gcode.chip import CLOCK_HZ
-    from nnik.firmware.gcode.job_input import read_job
+    from nnik.firmware.gcode.job_input import JobOptions, prepare, read_job
+    from nnik.firmware.gcode.reader import sendable
     from nnik.job.measure import cpu_report, motion_report
     from nnik.firmware.gcode.motion import interpret, plan_steps
     from nnik.firmware.gcode.steps import chip_events, model_events
@@ -72,7 +73,9 @@ def run_one(run: Path, cfg, work: Path, jobs=JOBS) -> dict:
     out = {"flash_bytes": fw.flash_bytes, "ram_bytes": fw.ram_bytes, "shaper_ram_bytes": cfg.shaper_ram_bytes,
            "selftest": next((t for _, t in st.replies if t.startswith(("PASS", "FAIL"))), "no answer"), "jobs": {}}
     for job in jobs:
-        lines = read_job(DATASETS / "jobs" / f"{job}.gcode")
+        path = DATASETS / "jobs" / f"{job}.gcode"
+        # the lines as `nnik job` sends them (prepared for the flavour, text): the same chip input
+        lines = [sendable(ln).decode("latin-1") for ln in prepare(read_job(path), cfg, JobOptions(), str(path)).lines]
         plan = interpret(lines, cfg)
         seg = plan_steps(plan, cfg, ik)
         res = chip.run_firmware(fw, lines, work / "build", 2.0 + 1.5 * seg.ticks.sum() / cfg.tick_hz)
