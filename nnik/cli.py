@@ -23,19 +23,20 @@ EPILOG = """commands by task:
   the pick            select, search, verify, report, export --arduino
   the MLP alone       generate, train, evaluate, export, estimate, tanh
   measured machines   synth-csv, shaper-calibrate
+  DC servos           excite, identify
 
 `nnik COMMAND --help` says what each one reads and writes."""
 
 
 def build_parser() -> argparse.ArgumentParser:
-    from nnik.commands import (estimate, export, job, mlp_steps, report, run, search, select, shaper_calibrate,
-                               synth_csv, tanh, verify)
+    from nnik.commands import (estimate, excite, export, identify, job, mlp_steps, report, run, search, select,
+                               shaper_calibrate, synth_csv, tanh, verify)
 
     ap = opt.OneLineParser(prog="nnik", description=DESCRIPTION, epilog=EPILOG,
                            formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = ap.add_subparsers(dest="command", required=True, metavar="COMMAND")
     for module in (run, job, select, search, verify, report, export, mlp_steps, estimate, tanh, synth_csv,
-                   shaper_calibrate):
+                   shaper_calibrate, excite, identify):
         module.register(sub)
     opt.check_paths(ap)
     return ap

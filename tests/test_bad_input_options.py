@@ -32,6 +32,9 @@ ACCEPTS = {
     ("job", "--offset"): {"-1", "0"},
     ("job", "--tool-z"): {"-1", "0"},
     ("job", "--seg-um"): set(),
+    ("excite", "--seconds"): set(),
+    ("excite", "--seed"): {"0"},
+    ("identify", "--supply"): set(),
 }
 SAMPLES = ("-1", "0", "huge")
 ALWAYS_BAD = ("abc", "", "inf", "-inf", "nan", "1e400", "0x10", "1,5")

@@ -53,6 +53,8 @@ def register(sub) -> None:
                    help="write OUTDIR/job/JOB_precompensated.gcode (the job rewritten so the modelled belts' tip "
                         "follows the path) and run that instead")
     p.add_argument("--no-chip", action="store_true", help="Python model only, no simavr run")
+    p.add_argument("--controller", choices=("pid", "pdff", "ccc"),
+                   help="a dc_servo xy_table's controller (default: the one `nnik run` chose)")
     p.add_argument("--mcu", choices=("atmega328p", "atmega2560"), default="atmega328p",
                    help="the simulated chip: the Uno's atmega328p (default) or the Mega's atmega2560")
     p.set_defaults(func=cmd_job)
@@ -152,6 +154,14 @@ def cmd_job(args) -> dict:
     from nnik.firmware.model_dir import ModelDir
     from nnik.job.open_loop import run_job
 
+    from nnik.commands.servo_job import cmd_servo_job, servo_target
+
+    if (target := servo_target(args)) is not None:  # a dc_servo xy_table: the job closed loop
+        if not args.check:
+            check_job_outputs(check_model_dir(target[0], JOB_DIR), Path(args.job))
+        return cmd_servo_job(args, target)
+    if args.controller:
+        raise NnikError("only a dc_servo xy_table's job has a controller", None, "--controller")
     out, scn = _model_dir(args)
     from nnik.files.pick_state import require_deliverable
 

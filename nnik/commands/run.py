@@ -52,6 +52,12 @@ def cmd_run(args) -> None:
     scn = load_scenario(args.scenario)
     out = scenario_outdir(args, scn, create=True)
     console.print(f"[bold]nnik run[/bold] {scn.source} -> {out}/")
+    if scn.servo is not None:  # a DC-servo xy_table: identify, tune, the closed loop (nnik.commands.servo_run)
+        from nnik.commands.servo_run import run_servo
+
+        run_servo(scn, out, lambda line: console.print(line, markup=False))
+        console.print(f"done in {time.perf_counter() - t0:.1f} s")
+        return
     if args.no_normalize:  # the MLP alone on raw mm inputs (seed 004's Table 1 'without'): no families, no pick
         print_generated(pipeline.generate(scn, out))
         warn_training(pipeline.train(scn, out, normalize=False))

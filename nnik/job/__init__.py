@@ -6,6 +6,9 @@
 Each stage is one module with typed input and output (JobRequest -> ParsedJob -> PlannedJob ->
 ShapedJob -> SampledJob [-> CoSimulated] -> MeasuredJob -> the figures) and imports only the stages
 before it. The model directory is read once, into nnik.firmware.model_dir.ModelDir, and handed
-down; no stage opens it. A kind of job (kind.JobKind) composes the stages: open_loop.OpenLoopJob
-is the one there is; kind.py says where a closed-loop job goes.
+down; no stage opens it. A kind of job (kind.JobKind) composes the stages: open_loop.OpenLoopJob,
+and closed_loop.ClosedLoopJob for a DC-servo XY table:
+
+    parse -> reference -> servo_loop (Python; the chip) -> servo_measure -> servo_report
+             reference.py  servo_loop.py                   servo_measure.py  servo_report.py
 """

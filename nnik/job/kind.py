@@ -2,12 +2,11 @@
 
 A kind composes the stages it needs, in their order (nnik/job/__init__.py draws them); the
 stages never import a kind. The open-loop job (nnik.job.open_loop.OpenLoopJob: the pick's IK on
-the firmware's samples) is the one there is. A closed-loop job (a controller closing the loop on
-the motors instead of the open-loop IK) goes beside it as nnik/job/closed_loop.py: it reuses
-parse, plan and shape as they are, puts its own stage module (e.g. nnik/job/control.py, taking a
-ShapedJob and giving the SampledJob that measure reads) where `sample` is, and its own
-co-simulation if its firmware differs; measure and report stay as they are. None of the stages it
-does not share needs to change.
+the firmware's samples) and the closed-loop job (nnik.job.closed_loop.ClosedLoopJob: a DC-servo
+XY table's controller closing the loop on its motors) are the two there are. The closed loop
+reuses parse and the interpreter and planner, and puts its own stages beside the open loop's:
+reference (the planner's samples at the servo tick, in counts), servo_loop (the loop in Python
+and on the chip), servo_measure and servo_report; its model directory is a servo_dir.ServoDir.
 """
 
 from __future__ import annotations

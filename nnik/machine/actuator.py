@@ -20,14 +20,19 @@ DAC = {
     "bits": Param("int", default=16, check=lambda v: None if 2 <= v <= 24 else f"must be 2..24, got {v}"),
     "optical_range_deg": Param("float", default=40.0, check=within(0.0, 180.0, open_lo=True, unit=" deg"), doc="full-scale optical swing"),
 }
-SCHEMAS = {"stepper": STEPPER, "dac": DAC}
+DC_SERVO = {
+    "kind": Param("str", required=True),
+    "counts_per_rev": Param("int", default=1200, check=within(4, 1_000_000),
+                            doc="encoder counts (quadrature 4x) per revolution of the gearbox's output, the screw"),
+}
+SCHEMAS = {"stepper": STEPPER, "dac": DAC, "dc_servo": DC_SERVO}
 MAX_UNITS = 2.0**30  # commands the int32 outputs of the generated C carry with headroom
 
 
 @dataclass(frozen=True)
 class Actuator:
     kind: str
-    unit: str  # "microstep" | "lsb"
+    unit: str  # "microstep" | "lsb" | "count"
     units_per_rad: float  # per radian of joint (mechanical) angle
     params: dict
     code_range: tuple[int, int] | None = None  # DAC codes that exist
@@ -37,6 +42,8 @@ class Actuator:
         if p["kind"] == "stepper":
             per_rev = p["steps_per_rev"] * p["microsteps"]
             return cls("stepper", "microstep", per_rev / (2 * np.pi), p)
+        if p["kind"] == "dc_servo":  # the screw's angle in encoder counts
+            return cls("dc_servo", "count", p["counts_per_rev"] / (2 * np.pi), p)
         full = 2 ** p["bits"]
         # optical = 2 x mechanical, so one mechanical radian is two optical ones
         per_rad = full / np.radians(p["optical_range_deg"]) * 2
@@ -71,4 +78,6 @@ class Actuator:
         if self.kind == "stepper":
             p = self.params
             return f"stepper {p['steps_per_rev']} steps/rev x {p['microsteps']} microsteps"
+        if self.kind == "dc_servo":
+            return f"DC servo, {self.params['counts_per_rev']} encoder counts/rev"
         return f"DAC {self.params['bits']} bit over {self.params['optical_range_deg']:g} deg optical"

@@ -15,6 +15,7 @@ from nnik.machine.kinematics import KINDS, Mechanism, Workspace
 from nnik.machine import ranges
 from nnik.machine.kinematics.measured import check_marks_for_network
 from nnik.machine.motion import validate_motion
+from nnik.machine.servo import ServoConfig, servo_tables
 from nnik.machine.shaper_table import validate_shaper
 from nnik.machine.params import MAX_LENGTH_MM, Param, positive, validate_table
 
@@ -57,6 +58,8 @@ TOP = {
     "motion": Param("table", default={}),
     "dynamics": Param("table", default={}),
     "shaper": Param("table", default={}),
+    "servo": Param("table", default=None),  # a dc_servo's plant (nnik.machine.servo)
+    "controller": Param("table", default=None),
 }
 def _extent(v):
     return None if max(abs(v[0]), abs(v[1])) <= MAX_LENGTH_MM else f"must lie within +/-{MAX_LENGTH_MM:g} mm, got {list(v)}"
@@ -155,6 +158,8 @@ class Scenario:
     motion: dict | None = None  # [motion] with defaults (nnik.machine.motion)
     dynamics: dict | None = None  # [dynamics]: {"f_hz": (fx, fy), "zeta": (zx, zy)}, or None
     shaper: dict | None = None  # [shaper] per axis (nnik.machine.shaper_table), or None
+    servo: ServoConfig | None = None  # a dc_servo's [servo] tables (nnik.machine.servo), or None
+    controller: dict | None = None  # a dc_servo's [controller] with defaults, or None
 
     @property
     def outputs(self) -> list[str]:
@@ -219,6 +224,7 @@ class Scenario:
             affine = mechanism.affine_inverse(workspace.boundary()) - mechanism.q_rest
             actuator.check_range(actuator.to_units(affine), source)
         mechanism.check_reach()
+        servo, controller = servo_tables(top, actuator, mechanism, source)
         if mechanism.analytic:
             units = actuator.to_units(mechanism.inverse(workspace.boundary()) - mechanism.q_rest)
             actuator.check_range(units, source)
@@ -261,6 +267,8 @@ class Scenario:
             motion=motion,
             dynamics=dynamics,
             shaper=shaper,
+            servo=servo,
+            controller=controller,
         )
 
 

@@ -9,6 +9,7 @@ from nnik.machine.kinematics import KINDS
 from nnik.machine.kinematics.belt import DISTORTION
 from nnik.machine.motion import DYNAMICS, MOTION
 from nnik.machine.params import Param
+from nnik.machine.servo_params import AXIS, CONTROLLER, IDENTIFIED, SERVO
 from nnik.machine.shaper_table import SHAPER
 
 TABLES = {
@@ -16,6 +17,10 @@ TABLES = {
     "training": scenario.TRAINING, "export": scenario.EXPORT, "target": scenario.TARGET,
     "tool": scenario.TOOL, "motion": MOTION, "dynamics": DYNAMICS, "shaper": SHAPER,
     "mechanism.distortion": DISTORTION,
+    # [servo.y] and [servo.y.identified] take the same keys as X's (the page says so)
+    "servo": {k: p for k, p in SERVO.items() if p.kind != "table"},
+    "servo.x": {k: p for k, p in AXIS.items() if p.kind != "table"},
+    "servo.x.identified": IDENTIFIED, "controller": CONTROLLER,
 }
 
 

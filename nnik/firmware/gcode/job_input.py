@@ -16,6 +16,7 @@ from nnik.errors import NnikError
 from nnik.machine import ranges
 from nnik.firmware.config import FEATURES, SCALE_ONE, TOOLS, MachineConfig
 from nnik.firmware.gcode import fit as fitting
+from nnik.firmware.gcode import step_directive
 from nnik.firmware.gcode.flavour import FLAVOURS, choose_rule, detect, scan
 from nnik.firmware.gcode.interpreter import Interpreter
 from nnik.firmware.gcode.reader import split_lines
@@ -103,6 +104,7 @@ def _interpret(lines: list[bytes], cfg: MachineConfig, source: str) -> tuple[Int
 def prepare(lines: list[bytes], cfg: MachineConfig, opts: JobOptions, source: str) -> Prepared:
     """The machine for this job (tool rule, flavour, frame, soft limits) and its summary."""
     _check_options(opts)
+    step_directive.refuse(lines, source)  # a closed-loop job rewrites its steps before it comes here
     facts = scan(lines)
     flavour, evidence = (opts.flavour, "--flavour") if opts.flavour else detect(facts)
     if opts.tool:

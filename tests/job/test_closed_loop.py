@@ -1,0 +1,104 @@
+"""`nnik run datasets/xy_table.toml` and `nnik job OUTDIR JOB.gcode` on the DC-servo xy_table, end to
+end through the command line: the run identifies, tunes, runs the seed's tests and names the
+default controller; the job runs closed loop in Python and on the simulated Uno (chip = model,
+`mismatch 0`), and a job outside the strokes is refused unless --fit is given."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+ROOT = Path(__file__).resolve().parents[2]
+JOBS = ROOT / "datasets" / "jobs"
+KINDS = ("pid", "pdff", "ccc")
+
+
+def nnik(*args, cwd=ROOT) -> subprocess.CompletedProcess:
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    return subprocess.run([sys.executable, "-m", "nnik", *map(str, args)], cwd=cwd, env=env, capture_output=True,
+                          text=True, timeout=1200)
+
+
+@pytest.fixture(scope="module")
+def xy_run(tmp_path_factory) -> tuple[Path, subprocess.CompletedProcess]:
+    out = tmp_path_factory.mktemp("xy") / "xy_table"
+    r = nnik("run", ROOT / "datasets" / "xy_table.toml", "-o", out)
+    assert r.returncode == 0, r.stderr[-2000:]
+    return out, r
+
+
+def test_nnik_run_identifies_tunes_runs_the_seeds_tests_and_names_the_default(xy_run):
+    out, r = xy_run
+    gains = json.loads((out / "servo" / "gains.json").read_text())
+    assert set(gains["gains"]) == set(KINDS)
+    ref = gains["reference_job"]
+    rms = {k: json.loads((out / "job" / f"{Path(ref).stem}_{k}.json").read_text())["contour_um"]["rms_um"]
+           for k in KINDS}
+    assert gains["chosen"] == min(rms, key=rms.get)
+    assert f"default controller: {gains['chosen']}" in r.stdout
+    assert "[servo.x.identified]" in (out / "servo" / "identified.toml").read_text()
+    md = (out / "report" / "closed_loop.md").read_text()
+    for job in ("servo_step_x25", "servo_step_y20", "servo_step_sequence", "servo_circle"):
+        assert f"## {job}.gcode" in md
+        for k in KINDS:
+            res = json.loads((out / "job" / f"{job}_{k}.json").read_text())
+            assert (out / "job" / f"{job}_{k}.png").is_file()
+            assert res["controller"] == k and res["contour_um"]["max_um"] >= res["contour_um"]["rms_um"] >= 0
+            if job.startswith("servo_step"):  # every step of the seed's tests is measured
+                assert len(res["steps"]) == res["reference"]["steps"] >= 1
+    circle = json.loads((out / "job" / f"servo_circle_{gains['chosen']}.json").read_text())
+    assert circle["reversals"]["count"] >= 4  # the circle's quadrants (and the approach's stop)
+
+
+def test_nnik_job_runs_a_step_closed_loop_in_python(xy_run, tmp_path):
+    out, _ = xy_run
+    r = nnik("job", out, JOBS / "servo_step_x25.gcode", "--no-chip", "--controller", "pid")
+    assert r.returncode == 0, r.stderr
+    res = json.loads((out / "job" / "servo_step_x25.json").read_text())
+    assert f"contour error: max {res['contour_um']['max_um']:.1f} um, RMS {res['contour_um']['rms_um']:.1f} um" \
+        in r.stdout
+    (s,) = res["steps"]
+    assert s["to_mm"] == [25.0, 0.0] and s["settling_s"] is not None
+    assert s["steady_state_um"] < 50  # the PID's integral holds the target within a few counts
+    assert "chip: not run (not asked)" in r.stdout
+
+
+def test_nnik_job_on_the_chip_is_bit_exact(xy_run):
+    from nnik.job.servo_loop import chip_missing
+
+    if (why := chip_missing()):
+        if os.environ.get("NNIK_REQUIRE_TOOLCHAINS") == "1":
+            pytest.fail(why)
+        pytest.skip(why)
+    out, _ = xy_run
+    for k in KINDS:
+        r = nnik("job", out, JOBS / "servo_step_sequence.gcode", "--controller", k)
+        assert r.returncode == 0, r.stderr
+        assert "mismatch 0" in r.stdout.splitlines()
+        assert "controller cycles per tick: max" in r.stdout
+
+
+def test_a_job_outside_the_strokes_is_refused_unless_fitted(xy_run, tmp_path):
+    out, _ = xy_run
+    job = tmp_path / "big.gcode"
+    job.write_text("G21 G90\nG1 X150 Y10 F1200\nG1 X250 Y10\nG1 X150 Y10\n")
+    r = nnik("job", out, job, "--no-chip")
+    assert r.returncode == 2 and r.stderr.count("\n") == 1
+    assert r.stderr.startswith(f"nnik: error: {job}: the job leaves the workspace") and "--fit" in r.stderr
+    assert not (out / "job" / "big.json").exists()
+    r = nnik("job", out, job, "--no-chip", "--fit")
+    assert r.returncode == 0, r.stderr
+    res = json.loads((out / "job" / "big.json").read_text())
+    assert res["gcode"]["frame"].startswith("fitted")
+
+
+def test_an_open_loop_option_on_the_xy_table_is_one_line(xy_run):
+    out, _ = xy_run
+    r = nnik("job", out, JOBS / "servo_step_x25.gcode", "--shaper", "zv")
+    assert r.returncode == 2 and r.stderr.count("\n") == 1 and "--shaper" in r.stderr
