@@ -39,6 +39,11 @@ def physical_units(scn, n_out: int) -> tuple[Phys | None, str]:
         return Phys("belt µm", um[:n_out], D_UM,
                     f"{res} µm of belt per {unit} (2πR / {per_rev}, R = "
                     f"{' / '.join(f'{r:.4g}' for r in radii)} mm)"), ""
+    if fam == "screw":  # an XY table: table travel per microstep or encoder count
+        per_rev = act.units_per_rad * 2 * math.pi
+        um = scn.mechanism.params["lead_mm"] * 1000.0 / per_rev
+        return Phys("table µm", [um] * n_out, D_UM,
+                    f"{um:.4g} µm of table travel per {unit} ({scn.mechanism.params['lead_mm']:g} mm/rev / {per_rev:.6g})"), ""
     if fam == "measured" and act.kind == "stepper" and act.params.get("mm_per_rev"):
         per_rev = act.params["steps_per_rev"] * act.params["microsteps"]
         um = act.params["mm_per_rev"] * 1000.0 / per_rev

@@ -152,3 +152,14 @@ def test_energy_in_is_stored_plus_dissipated(cfg, duty):
         stored = 0.5 * ax.j_kg_m2 * w[-1] ** 2 + 0.5 * ax.la_h * i[-1] ** 2
         assert supplied >= -1e-12
         assert math.isclose(supplied, lost + stored, rel_tol=2e-3, abs_tol=1e-9)
+
+
+@settings(max_examples=10, deadline=None)
+@given(cfg=configs(stiction=True), over=st.integers(1, 10_000), frac=st.floats(-0.49, 0.49))
+def test_the_duty_is_an_integer_saturated_at_duty_max(cfg, over, frac):
+    a, b = Plant(cfg), Plant(cfg)
+    dm = cfg.duty_max
+    for _ in range(5):
+        np.testing.assert_array_equal(a.step((dm + over, -dm - over)), b.step((dm, -dm)))
+        np.testing.assert_array_equal(a.step((100 + frac, -37 + frac)), b.step((100, -37)))
+    assert a.state(0) == b.state(0) and a.state(1) == b.state(1)

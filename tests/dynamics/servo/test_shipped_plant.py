@@ -89,3 +89,11 @@ def test_simulate_feeds_the_controller_the_counts_and_holds_its_saturated_duty()
     final = tr.counts[-1]
     assert abs(final[0] - 2000) < 200 and abs(final[1] + 1500) < 200
     np.testing.assert_allclose(tr.table_um, (tr.counts + 0.5) * CFG.um_per_count, atol=CFG.um_per_count)
+
+
+def test_simulate_is_reproducible():
+    t = np.arange(600) * CFG.tick_s
+    ref = np.stack([4000 + 2000 * np.sin(2 * np.pi * t), 3000 + 2000 * np.cos(2 * np.pi * t)], 1).round()
+    a, b = simulate(CFG, Bang(CFG.duty_max), ref, substeps=True), simulate(CFG, Bang(CFG.duty_max), ref, substeps=True)
+    for f in ("counts", "duty", "table_um", "substep_counts"):
+        np.testing.assert_array_equal(getattr(a, f), getattr(b, f))
