@@ -128,7 +128,7 @@ LAYERS = (
     # what the families are made of: the shared contract (base, problem, verify, accuracy,
     # c_common, avr_asm) and each family's fit, integer model, C, fast paths and cost
     ("implementations.shared", "implementations.mlp", "implementations.poly", "implementations.lut",
-     "implementations.hybrid"),
+     "implementations.hybrid", "implementations.servo"),  # servo: the closed loop's controllers (no family)
     ("estimate",),  # the MLP's cost model: it predicts cycles from the C the MLP emits
     ("implementations",),  # the families as the pipeline sees them: <family>/family.py and the registry
     ("selection",),
@@ -156,7 +156,7 @@ def room(mod: str) -> str:
         # verification, which the estimator predicts) are its family as the pipeline writes it
         if len(parts) == 1 or parts[-1] in ("family", "calibrate", "outputs"):
             return "implementations"
-        if parts[1] in FAMILY_FOLDERS or (len(parts) > 2 and (NNIK / "implementations" / parts[1]).is_dir()):
+        if parts[1] in FAMILY_FOLDERS or (NNIK / "implementations" / parts[1]).is_dir():  # a folder, its __init__ too
             return f"implementations.{parts[1]}"
         return "implementations.shared"
     if parts[0] == "estimate" and len(parts) > 1 and parts[1] in ESTIMATE_TOOLS:

@@ -83,6 +83,10 @@ def run_servo(scn, out: Path, say=print, use_chip: bool | None = None) -> dict:
     (out / GAINS_FILE).write_text(json.dumps(data, indent=2) + "\n")  # last: a model dir only once it is whole
     say(f"default controller: {best} (the lowest RMS contour error on {REFERENCE_JOB}: "
         f"{results[REFERENCE_JOB][best]['contour_um']['rms_um']:.1f} um)")
+    from nnik.implementations.servo.emit_c import write_controller_c
+
+    write_controller_c(model.controller(best), out / "c", f"nnik run {scn.source}: {best}, the default controller")
+    say(f"C of {best}: {out / 'c'}/ (nnik_servo_config.h with its gains, the controllers' sources)")
     chip = _chip(out, scn, best, use_chip, say)
     md = write_report(out, scn, fits, gains, best, results, chip)
     say(f"report: {md}")
