@@ -5,9 +5,9 @@
 #if defined(__AVR_ATmega328P__) || defined(__AVR_ATmega328__) || defined(__AVR_ATmega168__)
 #include <avr/interrupt.h>
 #include <avr/io.h>
-#include <avr/pgmspace.h>
 
 #include "nnik_ctl.h"
+#include "nnik_servo_config.h" /* the controller; NNIK_SERVO_OCR1A in an exported library */
 #include "nnik_servo.h"
 
 volatile int32_t nnik_servo_count[2];
