@@ -7,7 +7,6 @@ against libsimavr (cached by its source's hash, as the G-code runners are)."""
 
 from __future__ import annotations
 
-import hashlib
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -108,10 +107,3 @@ def build_harness(workdir: Path) -> Path:
     """The lockstep simavr runner (codegen/harness/arduino/nnik_simavr_servo.c)."""
     return _build_host_tool(HARNESS_SRC, Path(workdir), ["-lsimavr"], "build the simavr servo harness")
 
-
-def firmware_key(controller, tick_s: float) -> str:
-    """What a build depends on (a cache key): the controller's defines, the tick and the sources."""
-    h = hashlib.sha256(repr((controller.kind, sorted(controller.c_defines().items()), tick_s)).encode())
-    for p in sorted(SRC.glob("nnik_*")) + [FEED]:
-        h.update(p.read_bytes())
-    return h.hexdigest()[:16]
