@@ -70,14 +70,14 @@ def _sizes(elf: Path, cwd: Path) -> tuple[int, int]:
     return sec.get(".text", 0) + sec.get(".data", 0), sec.get(".data", 0) + sec.get(".bss", 0)
 
 
-def _symbols(elf: Path, cwd: Path) -> dict:
+def _symbols(elf: Path, cwd: Path, names=SYMBOLS) -> dict:
     res = run([find_tool("avr-nm"), elf], "avr-nm", cwd=cwd)
     found = {}
     for line in res.stdout.splitlines():
         parts = line.split()
-        if len(parts) == 3 and parts[2] in SYMBOLS:
+        if len(parts) == 3 and parts[2] in names:
             found[parts[2]] = int(parts[0], 16) - 0x800000
-    missing = [s for s in SYMBOLS if s not in found]
+    missing = [s for s in names if s not in found]
     if missing:
         raise TargetError(f"servo firmware: no symbol {', '.join(missing)} in {elf.name}")
     return found
@@ -101,6 +101,15 @@ def build_firmware(controller, tick_s: float, workdir: Path) -> ServoFirmware:
     if flash > FLASH_BYTES or ram > RAM_BYTES:
         raise TargetError(f"servo firmware does not fit the Uno: flash {flash} of {FLASH_BYTES} B, RAM {ram} of {RAM_BYTES} B")
     return ServoFirmware(elf, ocr, flash, ram, _symbols(elf, workdir))
+
+
+def sketch_firmware(elf: Path, tick_s: float) -> ServoFirmware:
+    """An exported sketch's ELF (it plays its own stored job: no reference feed) for the
+    co-simulation."""
+    elf = Path(elf).resolve()
+    flash, ram = _sizes(elf, elf.parent)
+    syms = _symbols(elf, elf.parent, ("nnik_servo_count", "nnik_servo_pos"))
+    return ServoFirmware(elf, tick_ocr1a(tick_s), flash, ram, {**syms, "nnik_servo_feed": 0})
 
 
 def build_harness(workdir: Path) -> Path:

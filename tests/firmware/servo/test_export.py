@@ -115,3 +115,35 @@ def test_bad_exports_are_refused(tmp_path):
     with pytest.raises(NnikError):
         export_servo_library(tmp_path / "mine", cfg, ctl, np.ones((5, 2)))
     assert (tmp_path / "mine" / "notes.txt").read_text() == "x"
+
+
+def test_the_exported_sketch_runs_its_job_closed_loop_as_the_model(tmp_path):
+    """The arduino-mk build itself on the simulated Uno, in closed loop with the plant: its stored
+    job's reference (the player's model, unpack) through the Python controller gives the sketch's
+    duty at every tick; every edge counted."""
+    from nnik.firmware.servo.build import sketch_firmware
+    from nnik.firmware.servo.cosim import run
+
+    mk = Path("/usr/share/arduino/Arduino.mk")
+    if not mk.is_file() or shutil.which("make") is None or shutil.which("simavr") is None:
+        if os.environ.get("NNIK_REQUIRE_TOOLCHAINS") == "1":
+            pytest.fail("arduino-mk or simavr not installed")
+        pytest.skip("arduino-mk or simavr not installed (run scripts/install_toolchains.sh)")
+    cfg = shipped_cfg()
+    start = (1200, 800)
+    ref = np.concatenate([np.tile([1200, 800], (10, 1)), np.tile([9000, -3000], (120, 1)),
+                          np.array([9000, -3000]) + np.cumsum(np.tile([3, -2], (60, 1)), axis=0)])
+    ctl = controller("ccc", cfg)
+    libdir = tmp_path / "libraries" / "nnik_xy"
+    export_servo_library(libdir, cfg, ctl, ref, start)
+    ex = libdir / "examples" / "xy_table_servo"
+    r = subprocess.run(["make", "-s"], cwd=ex, capture_output=True, text=True, timeout=600)
+    assert r.returncode == 0, r.stderr[-800:]
+    fw = sketch_firmware(next((ex / "build-uno").glob("*.elf")), cfg.tick_s)
+    n = len(ref) + 5
+    played = unpack(pack(ref, start), start, n)
+    tr = run(fw, cfg, ctl, played, tmp_path / "run", start_counts=start)
+    other = run(fw, cfg, controller("pid", cfg), played, tmp_path / "run2", start_counts=start)
+    assert other.mismatches > 0  # the check can fail: another controller is not the sketch
+    assert tr.mismatches == 0 and tr.lost_counts == 0
+    assert (tr.counts[0] == start).all() and np.abs(tr.chip_duty).max() > 0
