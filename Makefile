@@ -44,7 +44,8 @@ house: setup
 # `nnik job` on a 305 s raster: the Python model alone and with the simulated Uno, each over the
 # whole command, as times real time (nnik.bench.job_speed); the cost models against simavr and
 # gpsim: the MLP estimator on 60 random search networks (nnik.bench.estimator), the families'
-# on every shipped scenario and random machines (nnik.bench.costs); CI measures samples of both
+# on every shipped scenario and random machines (nnik.bench.costs); the closed-loop XY table's controllers
+# on the simulated Uno (cycles per tick, CPU % at 5 and 1 ms, the top encoder edge rate: nnik.bench.servo); CI measures samples of both
 bench: setup toolchains
 	$(PYTHON) -m nnik.bench.mlp $(SCENARIO)
 	$(PYTHON) -m nnik.bench.families
@@ -54,6 +55,7 @@ bench: setup toolchains
 	$(PYTHON) -m nnik.bench.lookahead
 	$(PYTHON) -m nnik.bench.seed003
 	$(PYTHON) -m nnik.bench.job_speed
+	$(PYTHON) -m nnik.bench.servo
 	$(PYTHON) -m nnik.bench.reproducible datasets/corexy_nonlinear.toml datasets/corexy_measured_2000.toml
 	$(PYTHON) -m nnik run datasets/corexy_nonlinear.toml > /dev/null && $(PYTHON) -m nnik.bench.builds build/galvo_cba2012 build/corexy_nonlinear
 	$(PYTHON) -m nnik.bench.plan_ram build/galvo_cba2012 build/corexy_nonlinear
