@@ -27,7 +27,8 @@ def job_row(r: dict) -> tuple[str, ...]:
         same = "equal" if c["steps_equal"] and c["replies_equal"] else "DIFFER"
         cps = c.get("cycles_per_sample")
         cpu = c.get("cpu_sample_loop")
-        chip = (f"{c['steps']} {same}", f"{cps['mean']:.0f} (longest stretch {cps['max']})" if cps else "-",
+        chip = (f"{c['steps']} {same}", (f"{cps['mean']:.0f} (worst sample {c['worst_sample_cycles']}, " if "worst_sample_cycles" in c else
+                 f"{cps['mean']:.0f} (") + f"longest stretch {cps['max']})" if cps else "-",
                 f"{100 * cpu:.1f} %" if cpu is not None else "-",
                 f"{c['flash_bytes']} / {c['ram_bytes']}" + (f" + {c['stack_bytes']} stack" if c.get("stack_bytes") else ""),
                 f"{c['tool_changes']} {'equal' if c['tool_equal'] else 'DIFFER'}" if "tool_equal" in c else "-")
