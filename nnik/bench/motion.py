@@ -60,7 +60,7 @@ def run_one(run: Path, cfg, work: Path, jobs=JOBS) -> dict:
     from nnik.firmware.gcode.chip import CLOCK_HZ
     from nnik.firmware.gcode.job_input import JobOptions, prepare, read_job
     from nnik.firmware.gcode.reader import sendable
-    from nnik.job.measure import cpu_report, motion_report
+    from nnik.job.measure import cpu_report, missed_samples, motion_report
     from nnik.firmware.gcode.motion import interpret, plan_steps
     from nnik.firmware.gcode.steps import chip_events, model_events
     from nnik.firmware.ik_oracle import ik_oracle
@@ -85,6 +85,7 @@ def run_one(run: Path, cfg, work: Path, jobs=JOBS) -> dict:
         out["jobs"][job] = {**{k: m[k] for k in ("job_s", "samples", "peak_step_rate_hz", "step_rate_limit_hz",
                                                  "overspeed_samples")},
                             **cpu_report(res, busy, m["samples"]),
+                            "missed_samples": missed_samples(res.marks, seg, CLOCK_HZ // cfg.tick_hz),
                             "steps": int(len(want)), "segments": int(len(seg.ticks)),
                             "steps_equal": bool(got.shape == want.shape and np.array_equal(got, want)
                                                 and len(res.marks) == len(seg.ticks))}

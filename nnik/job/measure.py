@@ -18,6 +18,7 @@ from nnik.dynamics.shaper_figures import axis_figures
 from nnik.errors import NnikError
 from nnik.files.atomic_write import write_file_atomic
 from nnik.firmware.config import MachineConfig
+from nnik.firmware.gcode.chip import CLOCK_HZ
 from nnik.firmware.gcode.contour import contour_report
 from nnik.firmware.gcode.steps import model_tool_events
 from nnik.firmware.gcode.tool_sync import summary, switches
@@ -128,6 +129,19 @@ def cpu_report(run, busy: np.ndarray, samples: int) -> dict:
     return out
 
 
+def missed_samples(marks: np.ndarray, seg, cycles_per_tick: int) -> int:
+    """Samples the chip computed too late: a segment that starts later than the one before it
+    ends (the stepper's queue ran dry) while the head moves on both sides of the gap (a planned
+    speed or a shaped move). A wait at rest (a sync, a dwell, the end) is no miss."""
+    marks = np.asarray(marks, dtype=np.int64)
+    n = min(len(marks), len(seg.ticks))
+    if n < 2:
+        return 0
+    late = np.diff(marks[:n]) - seg.ticks[:n - 1].astype(np.int64) * cycles_per_tick > cycles_per_tick // 2
+    moving = (np.asarray(seg.speed_q16[:n]) > 0) | (np.asarray(seg.chord[:n]) > 0)
+    return int((late & moving[:-1] & moving[1:]).sum())
+
+
 def write_step_counts(path: Path, steps: np.ndarray, start: np.ndarray) -> Path:
     """Each motor's count over time as the chip's pins show it: cycle, motor, dir, count after."""
     steps = np.asarray(steps, dtype=np.int64).reshape(-1, 3)
@@ -159,4 +173,5 @@ def compare_chip(co: CoSimulated, measured: MeasuredJob, out: Path) -> dict:
               "tool_equal": tev.shape == want_tev.shape and bool((tev == want_tev).all())})
     if len(busy) and res["segments"]:
         c.update(cpu_report(run, busy, res["motion"]["samples"]))
+        c["missed_samples"] = missed_samples(run.marks, seg, CLOCK_HZ // sampled.shaped.cfg.tick_hz)
     return c
