@@ -110,7 +110,7 @@ def main(argv=None) -> int:
                     results[key] = run_one(run, cfg, OUT / "motion" / "work" / f"{name}_{kind}_{hz}_{n}", jobs)
     t = Table(title="G-code firmware with the planner and the input shaper on the simulated Uno (16 MHz)")
     for col in ("scenario / shaper / samples / queue", "job", "job time (s)", "peak step rate / limit (Hz)", "sample loop CPU",
-                "cycles/sample", "steps equal", "flash / SRAM (B)", "shaper SRAM (B)", "self-test"):
+                "cycles/sample (worst)", "missed samples", "steps equal", "flash / SRAM (B)", "shaper SRAM (B)", "self-test"):
         t.add_column(col)
     for key, r in results.items():
         rows = r["jobs"].items() or [("-", None)]
@@ -118,7 +118,8 @@ def main(argv=None) -> int:
             t.add_row(key, job, f"{j['job_s']:.3f}" if j else "-",
                       f"{j['peak_step_rate_hz']:.0f} / {j['step_rate_limit_hz']}" if j else "-",
                       f"{100 * j['cpu_sample_loop']:.1f} %" if j and "cpu_sample_loop" in j else "-",
-                      f"{j['cycles_per_sample']['mean']:.0f}" if j else "-",
+                      f"{j['cycles_per_sample']['mean']:.0f} ({j.get('worst_sample_cycles', '-')})" if j else "-",
+                      str(j["missed_samples"]) if j else "-",
                       ("yes" if j["steps_equal"] else "NO") if j else "-",
                       f"{r['flash_bytes']} / {r['ram_bytes']}", str(r["shaper_ram_bytes"]), r["selftest"][:24])
     console.print(t)
