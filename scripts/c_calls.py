@@ -34,6 +34,14 @@ EVERY_OPTION = {"NNIK_GC_G5": "1", "NNIK_GC_G93": "1", "NNIK_GC_PLANES": "1", "N
 # (tool, rule) builds whose union is compiled: a laser by S, a pen by Z (its tool code out of line),
 # a pen by E (inline)
 TOOL_BUILDS = ((0, 0), (1, 1), (1, 2))
+# src/ also holds the closed-loop XY table's C (issue 28: the controllers nnik_ctl_*, the servo
+# runtime nnik_servo*), built and exported on their own (nnik.firmware.servo), not the G-code engine
+CLOSED_LOOP = ("nnik_ctl", "nnik_servo")
+
+
+def engine_files(src: Path = SRC, suffixes=(".c",)) -> list[Path]:
+    """The G-code engine's files of src/ (the closed loop's left out)."""
+    return sorted(p for p in src.iterdir() if p.suffix in suffixes and not p.name.startswith(CLOSED_LOOP))
 
 
 def symbols(obj: Path, nm: str = "nm") -> tuple[set[str], set[str]]:
@@ -118,7 +126,7 @@ def compile_engine(workdir: Path, cc: str = "gcc", src: Path = SRC) -> dict[str,
 
     config_headers(workdir)
     objects: dict[str, list[Path]] = {}
-    for c in sorted(src.glob("*.c")):
+    for c in engine_files(src):
         objects[c.name] = []
         for tool, rule in TOOL_BUILDS:
             obj = workdir / f"{c.stem}-{tool}{rule}.o"

@@ -58,8 +58,9 @@ def run_one(run: Path, cfg, work: Path, jobs=JOBS) -> dict:
     from nnik.firmware.arduino import export_arduino
     from nnik.firmware.gcode import chip
     from nnik.firmware.gcode.chip import CLOCK_HZ
-    from nnik.firmware.gcode.job_input import read_job
-    from nnik.job.measure import cpu_report, motion_report
+    from nnik.firmware.gcode.job_input import JobOptions, prepare, read_job
+    from nnik.firmware.gcode.reader import sendable
+    from nnik.job.measure import cpu_report, missed_samples, motion_report
     from nnik.firmware.gcode.motion import interpret, plan_steps
     from nnik.firmware.gcode.steps import chip_events, model_events
     from nnik.firmware.ik_oracle import ik_oracle
@@ -72,7 +73,9 @@ def run_one(run: Path, cfg, work: Path, jobs=JOBS) -> dict:
     out = {"flash_bytes": fw.flash_bytes, "ram_bytes": fw.ram_bytes, "shaper_ram_bytes": cfg.shaper_ram_bytes,
            "selftest": next((t for _, t in st.replies if t.startswith(("PASS", "FAIL"))), "no answer"), "jobs": {}}
     for job in jobs:
-        lines = read_job(DATASETS / "jobs" / f"{job}.gcode")
+        path = DATASETS / "jobs" / f"{job}.gcode"
+        # the lines as `nnik job` sends them (prepared for the flavour, text): the same chip input
+        lines = [sendable(ln).decode("latin-1") for ln in prepare(read_job(path), cfg, JobOptions(), str(path)).lines]
         plan = interpret(lines, cfg)
         seg = plan_steps(plan, cfg, ik)
         res = chip.run_firmware(fw, lines, work / "build", 2.0 + 1.5 * seg.ticks.sum() / cfg.tick_hz)
@@ -82,6 +85,7 @@ def run_one(run: Path, cfg, work: Path, jobs=JOBS) -> dict:
         out["jobs"][job] = {**{k: m[k] for k in ("job_s", "samples", "peak_step_rate_hz", "step_rate_limit_hz",
                                                  "overspeed_samples")},
                             **cpu_report(res, busy, m["samples"]),
+                            "missed_samples": missed_samples(res.marks, seg, CLOCK_HZ // cfg.tick_hz),
                             "steps": int(len(want)), "segments": int(len(seg.ticks)),
                             "steps_equal": bool(got.shape == want.shape and np.array_equal(got, want)
                                                 and len(res.marks) == len(seg.ticks))}
@@ -106,7 +110,7 @@ def main(argv=None) -> int:
                     results[key] = run_one(run, cfg, OUT / "motion" / "work" / f"{name}_{kind}_{hz}_{n}", jobs)
     t = Table(title="G-code firmware with the planner and the input shaper on the simulated Uno (16 MHz)")
     for col in ("scenario / shaper / samples / queue", "job", "job time (s)", "peak step rate / limit (Hz)", "sample loop CPU",
-                "cycles/sample", "steps equal", "flash / SRAM (B)", "shaper SRAM (B)", "self-test"):
+                "cycles/sample (worst)", "missed samples", "steps equal", "flash / SRAM (B)", "shaper SRAM (B)", "self-test"):
         t.add_column(col)
     for key, r in results.items():
         rows = r["jobs"].items() or [("-", None)]
@@ -114,7 +118,8 @@ def main(argv=None) -> int:
             t.add_row(key, job, f"{j['job_s']:.3f}" if j else "-",
                       f"{j['peak_step_rate_hz']:.0f} / {j['step_rate_limit_hz']}" if j else "-",
                       f"{100 * j['cpu_sample_loop']:.1f} %" if j and "cpu_sample_loop" in j else "-",
-                      f"{j['cycles_per_sample']['mean']:.0f}" if j else "-",
+                      f"{j['cycles_per_sample']['mean']:.0f} ({j.get('worst_sample_cycles', '-')})" if j else "-",
+                      str(j["missed_samples"]) if j else "-",
                       ("yes" if j["steps_equal"] else "NO") if j else "-",
                       f"{r['flash_bytes']} / {r['ram_bytes']}", str(r["shaper_ram_bytes"]), r["selftest"][:24])
     console.print(t)

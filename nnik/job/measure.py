@@ -18,6 +18,7 @@ from nnik.dynamics.shaper_figures import axis_figures
 from nnik.errors import NnikError
 from nnik.files.atomic_write import write_file_atomic
 from nnik.firmware.config import MachineConfig
+from nnik.firmware.gcode.chip import CLOCK_HZ
 from nnik.firmware.gcode.contour import contour_report
 from nnik.firmware.gcode.steps import model_tool_events
 from nnik.firmware.gcode.tool_sync import summary, switches
@@ -111,16 +112,34 @@ def measure(sampled: SampledJob, warn=None) -> MeasuredJob:
 def cpu_report(run, busy: np.ndarray, samples: int) -> dict:
     """The sample loop's share of the CPU: the busy pin (high while the sketch parses, plans,
     samples, shapes, runs the IK and queues; low while it waits for queue room or input) over the
-    motion's time, from the first segment to the machine's last tick; and busy cycles per sample."""
+    motion's time, from the first segment to the machine's last tick; and busy cycles per sample.
+    worst_sample_cycles: the longest busy stretch inside the motion (one sample's work while the
+    segment queue is full; longer than the sample period, 16,000 cycles at 1 kHz, when the chip
+    computes behind the stepper), max: the longest of all (with the start's parsing and planning)."""
     first = int(run.marks[0]) if len(run.marks) else 0
     end = run.idle_cycle or run.end_cycle
     lo, hi = np.maximum(run.busy[:, 0], first), np.minimum(run.busy[:, 1], end)
-    inside = float(np.maximum(hi - lo, 0).sum())
+    inside = np.maximum(hi - lo, 0)
     out = {"cycles_per_sample": {"mean": float(busy.sum()) / max(samples, 1), "max": int(busy.max()),
-                                 "windows": int(len(busy))}}
+                                 "windows": int(len(busy))},
+           "worst_sample_cycles": int(inside.max()) if len(inside) else 0}
+    inside = float(inside.sum())
     if end > first:
         out["cpu_sample_loop"] = inside / (end - first)
     return out
+
+
+def missed_samples(marks: np.ndarray, seg, cycles_per_tick: int) -> int:
+    """Samples the chip computed too late: a segment that starts later than the one before it
+    ends (the stepper's queue ran dry) while the head moves on both sides of the gap (a planned
+    speed or a shaped move). A wait at rest (a sync, a dwell, the end) is no miss."""
+    marks = np.asarray(marks, dtype=np.int64)
+    n = min(len(marks), len(seg.ticks))
+    if n < 2:
+        return 0
+    late = np.diff(marks[:n]) - seg.ticks[:n - 1].astype(np.int64) * cycles_per_tick > cycles_per_tick // 2
+    moving = (np.asarray(seg.speed_q16[:n]) > 0) | (np.asarray(seg.chord[:n]) > 0)
+    return int((late & moving[:-1] & moving[1:]).sum())
 
 
 def write_step_counts(path: Path, steps: np.ndarray, start: np.ndarray) -> Path:
@@ -154,4 +173,5 @@ def compare_chip(co: CoSimulated, measured: MeasuredJob, out: Path) -> dict:
               "tool_equal": tev.shape == want_tev.shape and bool((tev == want_tev).all())})
     if len(busy) and res["segments"]:
         c.update(cpu_report(run, busy, res["motion"]["samples"]))
+        c["missed_samples"] = missed_samples(run.marks, seg, CLOCK_HZ // sampled.shaped.cfg.tick_hz)
     return c

@@ -17,6 +17,14 @@ def _um(s: dict | None, rms: bool = False) -> str:
     return f"{s['max']:.1f} / {s['rms']:.1f}" if rms else f"{s['max']:.2f}" if s["max"] < 10 else f"{s['max']:.1f}"
 
 
+def _cycles(c: dict, cps: dict) -> str:
+    """Busy cycles a sample on average, the longest busy stretch inside the motion and of all, and
+    the samples computed too late (the stepper's queue ran dry while the head moved)."""
+    worst = f"worst sample {c['worst_sample_cycles']}, " if "worst_sample_cycles" in c else ""
+    missed = f", {c['missed_samples']} missed" if "missed_samples" in c else ""
+    return f"{cps['mean']:.0f} ({worst}longest stretch {cps['max']}{missed})"
+
+
 def job_row(r: dict) -> tuple[str, ...]:
     c = r["chip"]
     t = r.get("tool") or {}
@@ -27,7 +35,7 @@ def job_row(r: dict) -> tuple[str, ...]:
         same = "equal" if c["steps_equal"] and c["replies_equal"] else "DIFFER"
         cps = c.get("cycles_per_sample")
         cpu = c.get("cpu_sample_loop")
-        chip = (f"{c['steps']} {same}", f"{cps['mean']:.0f} (longest stretch {cps['max']})" if cps else "-",
+        chip = (f"{c['steps']} {same}", _cycles(c, cps) if cps else "-",
                 f"{100 * cpu:.1f} %" if cpu is not None else "-",
                 f"{c['flash_bytes']} / {c['ram_bytes']}" + (f" + {c['stack_bytes']} stack" if c.get("stack_bytes") else ""),
                 f"{c['tool_changes']} {'equal' if c['tool_equal'] else 'DIFFER'}" if "tool_equal" in c else "-")

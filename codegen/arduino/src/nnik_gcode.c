@@ -44,14 +44,21 @@
 #endif
 
 /* ---------------------------------------------------------------- segments */
+/* the tool's duty; M4: the power follows the planned speed, duty * min(v, vn) / vn (no
+ * division at or above vn: a cruise costs none) */
+static uint8_t m4_duty(uint16_t tool, uint32_t v, uint32_t vn)
+{
+    if ((tool & TOOL_SCALED) && v < vn)
+        return (uint8_t)((uint32_t)(uint8_t)tool * v / vn);
+    return (uint8_t)tool;
+}
+
 static void out_sample(nnik_gc_t *g, const int32_t p[2], uint16_t tool, uint32_t v, uint32_t vn)
 {
     int32_t in[2], out[2], d[2];
     uint32_t ticks = SAMPLE_TICKS, a;
 #if NNIK_SH_LEN > 0
-    g->sh.t = (uint8_t)tool;
-    if (tool & TOOL_SCALED) /* M4: the power follows the planned speed */
-        g->sh.t = (uint8_t)((uint32_t)(uint8_t)tool * (v < vn ? v : vn) / vn);
+    g->sh.t = m4_duty(tool, v, vn);
 #endif
     nnik_sh_step(&g->sh, p, g->pt);
     in[0] = NNIK_GC_ORIGIN_X_UM + g->pt[0];
@@ -71,9 +78,7 @@ static void out_sample(nnik_gc_t *g, const int32_t p[2], uint16_t tool, uint32_t
 #if NNIK_SH_LEN > 0
     g->duty = g->sh.duty; /* the tool where the shaped head is (nnik_shaper.h) */
 #else
-    g->duty = (uint8_t)tool;
-    if (tool & TOOL_SCALED) /* M4: the power follows the planned speed */
-        g->duty = (uint8_t)((uint32_t)(uint8_t)tool * (v < vn ? v : vn) / vn);
+    g->duty = m4_duty(tool, v, vn);
 #endif
     g->steps[0] = out[0];
     g->steps[1] = out[1];

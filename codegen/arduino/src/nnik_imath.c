@@ -22,13 +22,48 @@ uint32_t nnik_isqrt32(uint32_t v)
     NNIK_ISQRT_BODY(uint32_t, v);
 }
 
+uint32_t nnik_div64_32(uint32_t hi, uint32_t lo, uint32_t d)
+{
+    uint32_t q = 0;
+    uint8_t i, top;
+    for (i = 0; i < 32; i++) { /* restoring division, one bit a step; hi < d throughout */
+        top = (uint8_t)((uint8_t)(hi >> 24) >> 7); /* the bit shifted out: the value is then > d */
+        hi = (hi << 1) | (uint8_t)((uint8_t)(lo >> 24) >> 7);
+        lo <<= 1;
+        q <<= 1;
+        if (top || hi >= d) {
+            hi -= d; /* mod 2^32: the true remainder, below d */
+            q |= 1;
+        }
+    }
+    return q;
+}
+
 uint32_t nnik_isqrt64(uint64_t v)
 {
-    if (v < 0x100000000ULL)
-        return nnik_isqrt32((uint32_t)v); /* 32-bit arithmetic: far cheaper on AVR */
-    {
-        NNIK_ISQRT_BODY(uint64_t, v);
+    uint32_t hi = (uint32_t)(v >> 32), lo = (uint32_t)v, r, rl, tl;
+    uint8_t i, rx, tx;
+    if (!hi)
+        return nnik_isqrt32(lo); /* 32-bit arithmetic: far cheaper on AVR */
+    /* digit by digit: the root of the high word, then the low word's 16 bit pairs, with the
+     * remainder (<= 2 r < 2^33, shifted: < 2^35) in 40 bits (rx:rl), by 32-bit steps */
+    r = nnik_isqrt32(hi);
+    rl = hi - r * r;
+    rx = 0;
+    for (i = 0; i < 16; i++) {
+        rx = (uint8_t)((rx << 2) | ((uint8_t)(rl >> 24) >> 6));
+        rl = (rl << 2) | ((uint8_t)(lo >> 24) >> 6);
+        lo <<= 2;
+        tl = (r << 2) | 1; /* the trial 4 r + 1 (tx:tl) */
+        tx = (uint8_t)((uint8_t)(r >> 24) >> 6);
+        r <<= 1;
+        if (rx > tx || (rx == tx && rl >= tl)) {
+            rx = (uint8_t)(rx - tx - (rl < tl));
+            rl -= tl;
+            r |= 1;
+        }
     }
+    return r;
 }
 
 int32_t nnik_div_round(int64_t a, uint32_t b)

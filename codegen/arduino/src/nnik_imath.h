@@ -14,9 +14,28 @@ extern "C" {
 /* |v| */
 static inline int32_t nnik_iabs32(int32_t v) { return v < 0 ? -v : v; }
 
+/* a * b, 16 x 16 -> 32 bits.  avr-gcc 5 turns the product of halves cut from 32-bit values into
+ * a 32 x 32 __mulsi3 (about twice the cycles); the empty asm keeps each operand 16-bit, so it
+ * calls __umulhisi3.  The same value everywhere. */
+#if defined(__GNUC__) && defined(__AVR__)
+#define NNIK_KEEP16(x) __asm__("" : "+r"(x))
+#else
+#define NNIK_KEEP16(x) ((void)0)
+#endif
+static inline uint32_t nnik_mul16(uint16_t a, uint16_t b)
+{
+    NNIK_KEEP16(a);
+    NNIK_KEEP16(b);
+    return (uint32_t)a * b;
+}
+
 /* floor(sqrt(v)) */
 uint32_t nnik_isqrt32(uint32_t v);
 uint32_t nnik_isqrt64(uint64_t v);
+
+/* floor((hi 2^32 + lo) / d) for hi < d (the quotient fits 32 bits), by 32-bit steps: far
+ * cheaper on AVR than a 64-bit division */
+uint32_t nnik_div64_32(uint32_t hi, uint32_t lo, uint32_t d);
 
 /* round(a / b) half away from zero, b > 0 (32-bit division where the operands allow) */
 int32_t nnik_div_round(int64_t a, uint32_t b);

@@ -23,8 +23,9 @@ static uint32_t acc_axis(uint32_t a, uint32_t L, uint32_t n)
     if (L < 0x400UL && a < 0x400000UL) /* a * L < 2^32 */
         return a * L / n;
     {
-        uint64_t v = (uint64_t)a * L / n;
-        return v > 0xFFFFFFFFUL ? 0xFFFFFFFFUL : (uint32_t)v;
+        uint64_t p = (uint64_t)a * L;
+        uint32_t hi = (uint32_t)(p >> 32);
+        return hi >= n ? 0xFFFFFFFFUL : nnik_div64_32(hi, (uint32_t)p, n); /* hi >= n: a quotient >= 2^32 */
     }
 }
 
@@ -113,9 +114,19 @@ void nnik_pl_push(nnik_plan_t *pl, int32_t x, int32_t y, int32_t feed, uint16_t 
     if (!dx && !dy)
         return;
     m = (uint64_t)ax * ax + (uint64_t)ay * ay;
-    while (m < (1ULL << 60)) { /* m = n 4^f in [2^60, 2^62): sqrt(n) 2^f to 31 bits */
-        m <<= 2;
-        f++;
+    { /* m = n 4^f in [2^60, 2^62): sqrt(n) 2^f to 31 bits; f from n's bit length, one shift */
+        uint32_t top = (uint32_t)(m >> 32);
+        uint8_t bits = top ? 32 : 0;
+        if (!top)
+            top = (uint32_t)m;
+        while (top) {
+            top >>= 1;
+            bits++;
+        }
+        if (bits < 61) {
+            f = (uint8_t)((62 - bits) >> 1);
+            m <<= 2 * f;
+        }
     }
     Lq = nnik_isqrt64(m);
     Lc = Lq + ((uint64_t)Lq * Lq != m); /* >= sqrt(n) 2^f: |u| <= 1 */
@@ -170,6 +181,12 @@ static uint8_t reaches(uint32_t c, uint32_t r_um, uint16_t r_fr)
     return r_um < ch || (r_um == ch && (uint16_t)(r_fr - (uint16_t)c) == 0);
 }
 
+/* t >> 9 of t < 2^25, by byte moves: no 9-step shift loop */
+static uint16_t shr9(uint32_t t)
+{
+    return (uint16_t)(((uint16_t)(t >> 16) << 7) | ((uint16_t)t >> 9));
+}
+
 /* after moving c this sample (rem > c left), can the block still brake to its exit speed?
  * d = floor((rem - c) / 65536) by 32-bit pieces. */
 static uint8_t can_brake(uint32_t c, uint32_t r_um, uint16_t r_fr, const nnik_pl_block_t *b)
@@ -182,9 +199,9 @@ static uint8_t can_brake(uint32_t c, uint32_t r_um, uint16_t r_fr, const nnik_pl
     d = r_um - ch;
     if (d > b->dbig) /* 2 acc d > 2^32 - 1 > any 4 ceil(c / 512)^2 */
         return 1;
-    cq = (c + 511) >> 9;
-    eq = b->exit >> 9;
-    return 2 * b->acc * d >= 4 * (cq * cq - eq * eq);
+    cq = shr9(c + 511); /* <= 2^15 */
+    eq = shr9(b->exit);
+    return 2 * b->acc * d >= 4 * (nnik_mul16((uint16_t)cq, (uint16_t)cq) - nnik_mul16((uint16_t)eq, (uint16_t)eq));
 }
 
 /* may the sample go at c?  Each block end it reaches it passes at most at that block's exit
@@ -212,10 +229,10 @@ static int32_t mul_q30(int32_t u, uint32_t s)
 {
     uint32_t a = u < 0 ? (uint32_t)0 - (uint32_t)u : (uint32_t)u;
     uint16_t ah = (uint16_t)(a >> 16), al = (uint16_t)a, sh = (uint16_t)(s >> 16), sl = (uint16_t)s;
-    uint32_t lo = (uint32_t)al * sl, mid = (uint32_t)ah * sl + (uint32_t)al * sh, hi = (uint32_t)ah * sh;
+    uint32_t lo = nnik_mul16(al, sl), mid = nnik_mul16(ah, sl) + nnik_mul16(al, sh), hi = nnik_mul16(ah, sh);
     uint32_t plo = lo + (mid << 16), q;
     hi += (mid >> 16) + (plo < lo);
-    q = (hi << 2) | (plo >> 30);
+    q = (hi << 2) | ((uint8_t)(plo >> 24) >> 6); /* plo >> 30 by its top byte: no 30-step shift loop */
     if (u >= 0)
         return (int32_t)q;
     return -(int32_t)(q + ((plo & 0x3FFFFFFFUL) != 0));

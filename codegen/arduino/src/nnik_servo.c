@@ -5,15 +5,17 @@
 #if defined(__AVR_ATmega328P__) || defined(__AVR_ATmega328__) || defined(__AVR_ATmega168__)
 #include <avr/interrupt.h>
 #include <avr/io.h>
-#include <avr/pgmspace.h>
 
 #include "nnik_ctl.h"
+#include "nnik_servo_config.h" /* the controller; NNIK_SERVO_OCR1A in an exported library */
 #include "nnik_servo.h"
 
 volatile int32_t nnik_servo_count[2];
 volatile int32_t nnik_servo_pos[2];
 volatile int16_t nnik_servo_duty[2];
-static uint8_t enc_prev; /* PINC's four encoder bits at the last interrupt */
+static uint8_t enc_prev;         /* PINC's four encoder bits at the last interrupt */
+static volatile uint16_t enc16[2]; /* the counts modulo 2^16: the interrupt's 16-bit work */
+static uint16_t enc16_seen[2];   /* enc16 when nnik_servo_count was last brought up to date */
 
 /* count change for (previous state << 2 | new state), a state being A | B << 1 (Gray order
  * 0 1 3 2 forward); 0 for no change and for a skipped state (both pins changed: a lost edge) */
@@ -23,13 +25,21 @@ ISR(PCINT1_vect)
 {
     uint8_t now = PINC & 0x0F;
     uint8_t prev = enc_prev;
-    int8_t dx = QDEC[(uint8_t)((prev & 3) << 2) | (now & 3)];
-    int8_t dy = QDEC[(uint8_t)(prev & 0x0C) | (now >> 2)];
     enc_prev = now;
-    if (dx)
-        nnik_servo_count[0] += dx;
-    if (dy)
-        nnik_servo_count[1] += dy;
+    enc16[0] += (int16_t)QDEC[(uint8_t)((prev & 3) << 2) | (now & 3)];
+    enc16[1] += (int16_t)QDEC[(uint8_t)(prev & 0x0C) | (now >> 2)];
+}
+
+/* nnik_servo_count brought up to date from the 16-bit counts (interrupts off; fewer than 32,768
+ * counts since the last call: the tick calls it every tick) */
+static void enc_update(void)
+{
+    uint8_t a;
+    for (a = 0; a < 2; a++) {
+        uint16_t c = enc16[a];
+        nnik_servo_count[a] += (int16_t)(c - enc16_seen[a]);
+        enc16_seen[a] = c;
+    }
 }
 
 void nnik_servo_begin(int32_t x, int32_t y)
@@ -63,7 +73,8 @@ ISR(TIMER1_COMPA_vect)
     int32_t pos[2], ref[2];
     int16_t duty[2];
     uint8_t a;
-    pos[0] = nnik_servo_count[0]; /* interrupts are off: both counts at the same instant */
+    enc_update();                  /* interrupts are off: both counts at the same instant */
+    pos[0] = nnik_servo_count[0];
     pos[1] = nnik_servo_count[1];
     sei();                         /* the encoder may preempt the computation from here on */
     nnik_servo_pos[0] = pos[0];

@@ -29,7 +29,8 @@ extern "C" {
 #define NNIK_SERVO_OCR1A 9999 /* tick = (OCR1A + 1) * 8 / F_CPU: 5 ms at 16 MHz */
 #endif
 
-/* The encoder counts (x, y), updated by the encoder interrupt; read with interrupts off. */
+/* The encoder counts (x, y) as of the last tick (the encoder interrupt counts modulo 2^16; each
+ * tick brings these up to date: fewer than 32,768 counts a tick, 6.5 m/s at 2.5 um). */
 extern volatile int32_t nnik_servo_count[2];
 /* The counts the last tick latched, and its duties (sign: direction). */
 extern volatile int32_t nnik_servo_pos[2];

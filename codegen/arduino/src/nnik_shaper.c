@@ -56,51 +56,57 @@ static void tool_step(nnik_shaper_t *sh, uint8_t at, uint16_t lag)
     sh->ms = j;
     sh->duty = sh->pd[j];
 }
+
+/* floor(v / 2^15) of |v| < 2^30 + 2^14 (|result| < 2^15), by byte moves: no 15-step shift loop */
+static int16_t shr15(int32_t v)
+{
+    return (int16_t)(2 * (int16_t)(v >> 16) + (int16_t)((uint16_t)v >> 15));
+}
+
+/* S += A (d - w): 0 at a steady speed, no multiply */
+#define NNIK_SH_TAP(S, A, d, w)                                                                  \
+    do {                                                                                         \
+        int16_t dw_ = (int16_t)((d) - (w));                                                      \
+        if (dw_)                                                                                 \
+            S += (int32_t)(A) * dw_;                                                             \
+    } while (0)
 #endif
 
 void nnik_sh_step(nnik_shaper_t *sh, const int32_t p[2], int32_t out[2])
 {
-    uint8_t a;
 #if NNIK_SH_LEN > 0
-    uint8_t at = sh->at;
-    int16_t d2 = 0, dd[2]; /* this sample's progress and increments (the rows take them last) */
-    uint16_t lag = 0;
-    for (a = 0; a < 3; a++) { /* X, Y, and the progress Q with axis 0's taps */
-        int16_t d = a < 2 ? (int16_t)(p[a] - sh->last[a]) : d2, *inc = sh->inc[a & 1];
-        int32_t sum = sh->s[a];
-        const uint16_t *amp = AMPS[a & 1];
-        const uint8_t *del = DELAYS[a & 1];
-        uint8_t k;
-        for (k = 0; k < NNIK_SH_N; k++) {
-            uint8_t dk = NNIK_RD_U8(del + k);
-            if (dk) { /* W_k += inc[n] - inc[n - dk] (read before the slot is written): S += A_k that */
-                uint8_t j = at >= dk ? (uint8_t)(at - dk) : (uint8_t)(at + NNIK_SH_LEN - dk);
-                int16_t dw = (int16_t)(d - (a < 2 ? inc[j] : (int16_t)progress(sh, j)));
-                if (dw) { /* 0 at a steady speed: no multiply */
-                    uint16_t A = NNIK_RD_U16(amp + k);
-                    sum += (int32_t)A * dw;
-                }
-            }
+    uint8_t at = sh->at, k;
+    int16_t dx = (int16_t)(p[0] - sh->last[0]), dy = (int16_t)(p[1] - sh->last[1]);
+    uint16_t ax = (uint16_t)(dx < 0 ? -dx : dx), ay = (uint16_t)(dy < 0 ? -dy : dy);
+    int16_t dq = (int16_t)(ax > ay ? ax : ay); /* this sample's progress (the rows take it last) */
+    int32_t s0 = sh->s[0], s1 = sh->s[1], s2 = sh->s[2];
+    for (k = 0; k < NNIK_SH_N; k++) { /* W_k += inc[n] - inc[n - dk] (read before the slot is written) */
+        uint8_t d0 = NNIK_RD_U8(&DELAYS[0][k]), d1 = NNIK_RD_U8(&DELAYS[1][k]), j;
+        if (d0) { /* X and the progress Q, with axis 0's taps */
+            uint16_t A = NNIK_RD_U16(&AMPS[0][k]);
+            j = at >= d0 ? (uint8_t)(at - d0) : (uint8_t)(at + NNIK_SH_LEN - d0);
+            NNIK_SH_TAP(s0, A, dx, sh->inc[0][j]);
+            NNIK_SH_TAP(s2, A, dq, (int16_t)progress(sh, j));
         }
-        sh->s[a] = sum;
-        sum = (16384 - sum) >> 15; /* |S| < 2^30: nnik.firmware.config checks |W| < 2^15 */
-        if (a < 2) {
-            dd[a] = d;
-            out[a] = p[a] + sum;
-            sh->last[a] = p[a];
-            if (d < 0)
-                d = (int16_t)-d;
-            if (d > d2)
-                d2 = d;
-        } else {
-            lag = (uint16_t)-sum;
+        if (d1) {
+            j = at >= d1 ? (uint8_t)(at - d1) : (uint8_t)(at + NNIK_SH_LEN - d1);
+            NNIK_SH_TAP(s1, NNIK_RD_U16(&AMPS[1][k]), dy, sh->inc[1][j]);
         }
     }
-    sh->inc[0][at] = dd[0];
-    sh->inc[1][at] = dd[1];
-    tool_step(sh, at, lag);
+    sh->s[0] = s0;
+    sh->s[1] = s1;
+    sh->s[2] = s2;
+    /* |S| < 2^30: nnik.firmware.config checks |W| < 2^15 */
+    out[0] = p[0] + shr15(16384 - s0);
+    out[1] = p[1] + shr15(16384 - s1);
+    sh->last[0] = p[0];
+    sh->last[1] = p[1];
+    sh->inc[0][at] = dx;
+    sh->inc[1][at] = dy;
+    tool_step(sh, at, (uint16_t)-shr15(16384 - s2));
     sh->at = (uint8_t)(at + 1 == NNIK_SH_LEN ? 0 : at + 1);
 #else
+    uint8_t a;
     for (a = 0; a < 2; a++) {
         out[a] = p[a];
         sh->last[a] = p[a];

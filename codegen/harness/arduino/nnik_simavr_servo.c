@@ -9,6 +9,9 @@
  *   FEED, COUNT, POS  the SRAM addresses of nnik_servo_feed, nnik_servo_count, nnik_servo_pos
  *   X0, Y0    the start counts (the encoder pins start in their phase; the counts are written
  *             once the firmware's set-up sleeps, before the first tick)
+ *   FEED 0: a firmware with its own reference (an exported sketch playing its stored job, which
+ *             sets its start counts itself): no reference is written, the references sent are
+ *             ignored, and the awake cycles count the sketch's main loop too (it does not sleep)
  * request k: ref_x, ref_y, then SUBSTEPS rows (count_x, count_y): the plant's count at the end of
  *   each substep of the tick before tick k (request 0: the start counts). Each count change is
  *   a run of quadrature edges on PC0..PC3; substep j's edges are spread evenly over the j-th of
@@ -341,9 +344,11 @@ int main(int argc, char **argv)
         set_pins(a, GRAY[phase[a]]);
         last[a] = start[a];
     }
-    boot();
-    wr32(count, start[0]);
-    wr32(count + 4, start[1]);
+    if (feed) { /* the co-simulation build: it sleeps after its set-up; the counts start here */
+        boot();
+        wr32(count, start[0]);
+        wr32(count + 4, start[1]);
+    }
     req = malloc((size_t)(2 + 2 * substeps) * sizeof *req);
     for (k = 0;; k++) {
         if (fread(req, sizeof *req, (size_t)(2 + 2 * substeps), stdin) != (size_t)(2 + 2 * substeps))
@@ -375,8 +380,10 @@ int main(int argc, char **argv)
             return 2;
         }
         schedule();
-        wr32(feed, req[0]);
-        wr32(feed + 4, req[1]);
+        if (feed) {
+            wr32(feed, req[0]);
+            wr32(feed + 4, req[1]);
+        }
         awake = enc_cycles = enc_n = enc_max = 0;
         run_tick();
         if (next_edge < n_edges) {

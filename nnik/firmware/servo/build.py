@@ -7,7 +7,6 @@ against libsimavr (cached by its source's hash, as the G-code runners are)."""
 
 from __future__ import annotations
 
-import hashlib
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -71,14 +70,14 @@ def _sizes(elf: Path, cwd: Path) -> tuple[int, int]:
     return sec.get(".text", 0) + sec.get(".data", 0), sec.get(".data", 0) + sec.get(".bss", 0)
 
 
-def _symbols(elf: Path, cwd: Path) -> dict:
+def _symbols(elf: Path, cwd: Path, names=SYMBOLS) -> dict:
     res = run([find_tool("avr-nm"), elf], "avr-nm", cwd=cwd)
     found = {}
     for line in res.stdout.splitlines():
         parts = line.split()
-        if len(parts) == 3 and parts[2] in SYMBOLS:
+        if len(parts) == 3 and parts[2] in names:
             found[parts[2]] = int(parts[0], 16) - 0x800000
-    missing = [s for s in SYMBOLS if s not in found]
+    missing = [s for s in names if s not in found]
     if missing:
         raise TargetError(f"servo firmware: no symbol {', '.join(missing)} in {elf.name}")
     return found
@@ -104,14 +103,16 @@ def build_firmware(controller, tick_s: float, workdir: Path) -> ServoFirmware:
     return ServoFirmware(elf, ocr, flash, ram, _symbols(elf, workdir))
 
 
+def sketch_firmware(elf: Path, tick_s: float) -> ServoFirmware:
+    """An exported sketch's ELF (it plays its own stored job: no reference feed) for the
+    co-simulation."""
+    elf = Path(elf).resolve()
+    flash, ram = _sizes(elf, elf.parent)
+    syms = _symbols(elf, elf.parent, ("nnik_servo_count", "nnik_servo_pos"))
+    return ServoFirmware(elf, tick_ocr1a(tick_s), flash, ram, {**syms, "nnik_servo_feed": 0})
+
+
 def build_harness(workdir: Path) -> Path:
     """The lockstep simavr runner (codegen/harness/arduino/nnik_simavr_servo.c)."""
     return _build_host_tool(HARNESS_SRC, Path(workdir), ["-lsimavr"], "build the simavr servo harness")
 
-
-def firmware_key(controller, tick_s: float) -> str:
-    """What a build depends on (a cache key): the controller's defines, the tick and the sources."""
-    h = hashlib.sha256(repr((controller.kind, sorted(controller.c_defines().items()), tick_s)).encode())
-    for p in sorted(SRC.glob("nnik_*")) + [FEED]:
-        h.update(p.read_bytes())
-    return h.hexdigest()[:16]

@@ -102,12 +102,13 @@ class ChipSession:
         self._err.close()
 
 
-def run(fw: ServoFirmware, cfg, controller, ref_counts, workdir: Path, plant=None,
+def run(fw: ServoFirmware, cfg, controller, ref_counts, workdir: Path | None = None, plant=None,
         start_counts=(0, 0), model_duty=None) -> ChipTrace:
     """Run ref_counts ((N, 2) int, counts) closed loop: the chip (fw) drives `plant` (default
     nnik.dynamics.servo.plant.Plant(cfg, start_counts)); `controller` (the integer Python model,
     reset first) predicts each duty. model_duty(k, duty) may replace the model's duty (a test's
-    deliberately wrong model)."""
+    deliberately wrong model). workdir: where the harness is built and logs (default: beside the
+    firmware's ELF)."""
     ref = np.asarray(ref_counts, dtype=np.int64).reshape(-1, 2)
     if len(ref) == 0:
         raise NnikError("servo co-simulation: no ticks in the reference")
@@ -117,7 +118,8 @@ def run(fw: ServoFirmware, cfg, controller, ref_counts, workdir: Path, plant=Non
         from nnik.dynamics.servo.plant import Plant
         plant = Plant(cfg, start_counts)
     start = tuple(int(c) for c in plant.counts)
-    Path(workdir).mkdir(parents=True, exist_ok=True)
+    workdir = Path(workdir) if workdir is not None else Path(fw.elf).parent / "cosim"
+    workdir.mkdir(parents=True, exist_ok=True)
     n = len(ref)
     out = {k: np.zeros((n, 2), np.int64) for k in ("chip", "model", "counts", "plant")}
     scal = np.zeros((n, 5), np.int64)

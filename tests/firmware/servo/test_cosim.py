@@ -80,3 +80,32 @@ def test_a_tick_timer1_cannot_make_is_refused(tick_s):
 
 def test_tick_timer_values():
     assert tick_ocr1a(0.005) == 9999 and tick_ocr1a(0.001) == 1999
+
+
+class RunawayPlant:
+    """A plant too fast for any encoder interrupt: `per_substep` counts every substep on X."""
+
+    table_um = (0.0, 0.0)
+
+    def __init__(self, substeps: int, per_substep: int):
+        self.substeps, self.per, self.counts = substeps, per_substep, (0, 0)
+
+    def step(self, duty):
+        x0 = self.counts[0]
+        rows = np.array([[x0 + self.per * (j + 1), 0] for j in range(self.substeps)], dtype=np.int64)
+        self.counts = (int(rows[-1, 0]), 0)
+        return rows
+
+
+def test_lost_edges_are_seen(tmp_path):
+    """Edges closer than the encoder interrupt can take: the chip's counts fall behind the plant's,
+    the co-simulation says so, and chip = model still holds (the model sees the chip's counts)."""
+    cfg = shipped_cfg()
+    fw = firmware("pid", cfg, tmp_path)
+    slow = run(fw, cfg, controller("pid", cfg), np.zeros((6, 2), np.int64), tmp_path / "slow",
+               plant=RunawayPlant(cfg.substeps, 5))
+    assert slow.lost_counts == 0  # 200 counts a tick: every edge counted
+    fast = run(fw, cfg, controller("pid", cfg), np.zeros((6, 2), np.int64), tmp_path / "fast",
+               plant=RunawayPlant(cfg.substeps, 1500))
+    assert fast.lost_counts >= 4 and fast.mismatches == 0
+    assert (fast.counts[1:, 0] < fast.plant_counts[1:, 0]).all()

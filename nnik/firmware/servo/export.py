@@ -1,0 +1,71 @@
+"""The Uno's closed-loop library (issue 28 item 7): an Arduino library with the servo runtime
+(codegen/arduino/src/nnik_servo.c: encoder interrupts, PWM, the tick), the controller's C and a
+stored job (nnik.firmware.servo.job_pack), and the example sketch NAME_servo with a Makefile for
+Debian's arduino-mk, as the open-loop export (nnik.firmware.arduino) writes its examples.
+
+    export_servo_library(libdir, cfg, controller, ref_counts, start=(0, 0), name="xy_table")
+
+The folder is written whole (nnik.files.replace_dir): an earlier export's folder is replaced, a
+folder nnik did not write is refused.
+"""
+
+from __future__ import annotations
+
+import shutil
+from pathlib import Path
+
+from nnik.emit.c_text import c_comment_safe
+from nnik.errors import NnikError
+from nnik.firmware.arduino import _env, homepage
+from nnik.firmware.servo.build import FLASH_BYTES, SRC, copy_runtime, tick_ocr1a
+from nnik.firmware.servo.job_pack import data_header, pack
+from nnik.implementations.servo.emit_c import write_controller_c
+
+MARKER = ".nnik-servo-library"
+VERSION = "0.1.0"
+JOB_FLASH_BYTES = FLASH_BYTES - 6 * 1024  # the job's share: the sketch without it (core, Serial, runtime, controller) takes < 6 KiB (tests/firmware/servo/test_export.py builds it)
+REPORT_MS = 100
+
+
+def export_servo_library(libdir: Path, cfg, controller, ref_counts, start=(0, 0), name: str = "xy_table",
+                         source: str = "nnik") -> dict:
+    """Write the library; returns {"libname", "dir", "example", "job_bytes", "ticks"}. A job that
+    is empty or does not fit the Uno's flash, or a tick Timer1 cannot make -> NnikError."""
+    from nnik.files.replace_dir import check_replaceable, staged_folder
+
+    ocr = tick_ocr1a(cfg.tick_s)
+    import numpy as np
+
+    ref = np.asarray(ref_counts, dtype=np.int64).reshape(-1, 2)
+    if len(ref) == 0:
+        raise NnikError("stored job: no ticks")
+    data = pack(ref, start)
+    if len(data) > JOB_FLASH_BYTES:
+        raise NnikError(f"stored job: {len(data):,} bytes do not fit the Uno's flash ({JOB_FLASH_BYTES:,} B for the job)")
+    libname = f"nnik_{name}_servo"
+    final = Path(libdir)
+    check_replaceable(final, MARKER, "Arduino servo library")
+    example = f"{name}_servo"
+    ctx = dict(name=name, libname=libname, version=VERSION, kind=controller.kind, tick_ms=f"{cfg.tick_s * 1e3:g}",
+               homepage=homepage(), source=c_comment_safe(source), ticks=len(ref), job_bytes=len(data),
+               x0=int(start[0]), y0=int(start[1]), report_ms=REPORT_MS, example=example,
+               libdir_name=final.resolve().name)
+    with staged_folder(final, MARKER, "Arduino servo library", f"{libname} {VERSION}: written by nnik\n") as d:
+        src = d / "src"
+        write_controller_c(controller, src, source)
+        copy_runtime(src)
+        for f in ("nnik_servo_job.c", "nnik_servo_job.h"):
+            shutil.copy(SRC / f, src / f)
+        (src / "nnik_servo_job_data.h").write_text(data_header(data, start, len(ref), source))
+        # the tick's timer value, for the runtime (the sketch's build has no -D of nnik's)
+        cfg_h = src / "nnik_servo_config.h"
+        cfg_h.write_text(cfg_h.read_text().replace("#endif /* NNIK_SERVO_CONFIG_H */",
+                                                   f"#ifndef NNIK_SERVO_OCR1A\n#define NNIK_SERVO_OCR1A {ocr}  /* the tick: "
+                                                   f"{cfg.tick_s * 1e3:g} ms */\n#endif\n\n#endif /* NNIK_SERVO_CONFIG_H */"))
+        env = _env()
+        (d / "library.properties").write_text(env.get_template("servo_library.properties.j2").render(**ctx))
+        ex = d / "examples" / example
+        ex.mkdir(parents=True)
+        (ex / f"{example}.ino").write_text(env.get_template("servo.ino.j2").render(**ctx))
+        (ex / "Makefile").write_text(env.get_template("Makefile.j2").render(**ctx))
+    return {"libname": libname, "dir": str(final), "example": example, "job_bytes": len(data), "ticks": len(ref)}
