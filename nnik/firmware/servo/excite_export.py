@@ -24,8 +24,9 @@ import numpy as np
 
 from nnik.emit.c_text import c_comment_safe
 from nnik.errors import NnikError
-from nnik.firmware.arduino import _env, homepage
+from nnik.firmware.arduino import homepage
 from nnik.firmware.servo.build import SRC, copy_runtime, tick_ocr1a
+from nnik.firmware.servo.export import write_library_files
 
 VERSION = "0.1.0"
 HEADER = "t,u_x,u_y,count_x,count_y"
@@ -90,10 +91,5 @@ def write_excite_library(d: Path, cfg, duties_h: str, ticks: int, start, name: s
         f"/* nnik excite: the runtime's tick ({cfg.tick_s * 1e3:g} ms); the controller is the table player */\n"
         f"#ifndef NNIK_SERVO_CONFIG_H\n#define NNIK_SERVO_CONFIG_H\n#ifndef NNIK_SERVO_OCR1A\n"
         f"#define NNIK_SERVO_OCR1A {ocr}\n#endif\n#endif /* NNIK_SERVO_CONFIG_H */\n")
-    env = _env()
-    (d / "library.properties").write_text(env.get_template("excite_library.properties.j2").render(**ctx))
-    ex = d / "examples" / example
-    ex.mkdir(parents=True)
-    (ex / f"{example}.ino").write_text(env.get_template("excite.ino.j2").render(**ctx))
-    (ex / "Makefile").write_text(env.get_template("Makefile.j2").render(**ctx))
+    write_library_files(d, ctx, "excite_library.properties.j2", "excite.ino.j2")
     return {"libname": libname, "example": example, "table_bytes": 4 * ticks}
