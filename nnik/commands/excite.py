@@ -84,7 +84,7 @@ def run(args) -> None:
     from nnik.dynamics.servo.servo_error import ServoError
     from nnik.files.atomic_write import write_file_atomic
     from nnik.files.replace_dir import staged_folder
-    from nnik.firmware.servo.excite_export import tick_us, write_excite_library
+    from nnik.firmware.servo.excite_export import check_serial_rate, serial_log, tick_us, write_excite_library
     from nnik.machine.scenario import load_scenario
 
     scn = load_scenario(args.scenario)
@@ -106,6 +106,7 @@ def run(args) -> None:
         print(f"{name}: step probe K {p.k_counts_s_v:.4g} counts/s/V, tau {p.tau_s:.4g} s -> square +-{a.amplitude_v:g} V, "
               f"half period {a.half_period_ticks} ticks ({a.half_period_ticks * cfg.tick_s:g} s), noise sigma "
               f"{a.sigma_v:.3g} V (sigma^2 = 0.3 x {a.amplitude_v:g})")
+    check_serial_rate(serial_log(ex.duty, ex.counts, cfg.tick_s, cfg.duty_max), cfg.tick_s)
     name = re.sub(r"\W", "_", Path(args.scenario).stem)
     files = {"duty.csv": duty_csv(cfg.tick_s, ex.duty),
              "log.csv": log_csv(cfg.tick_s, cfg.supply_v, cfg.duty_max, ex.duty, ex.counts),

@@ -92,6 +92,12 @@ def test_bad_input(tmp_path):
     one_error(nnik("excite", DATASETS / "galvo_cba2012.toml", "-o", tmp_path / "g"), "no [servo] table")
     one_error(nnik("excite", XY, "-o", tmp_path / "long", "--seconds", 40), "--seconds", "24576 bytes")
     one_error(nnik("excite", XY, "--seconds", 0.1), "--seconds")
+    text = XY.read_text()
+    assert "tick_s = 0.005 " in text
+    for tick, what in (("0.0050005", "whole microseconds"), ("0.002", "115200 baud")):
+        odd = tmp_path / f"odd_{what[:5]}.toml"
+        odd.write_text(text.replace("tick_s = 0.005 ", f"tick_s = {tick} "))
+        one_error(nnik("excite", odd, "-o", tmp_path / "odd", "--seconds", 2), what)
     mine = tmp_path / "mine"
     mine.mkdir()
     (mine / "notes.txt").write_text("keep")

@@ -10,7 +10,7 @@ The serial log (115200 baud) is `nnik identify`'s format with duty fractions (id
 V the supply the motors actually ran on): `t,u_x,u_y,count_x,count_y`, t = k x tick with 6
 decimals, u = duty / duty_max with 6 decimals (rounded half away from zero), the counts the tick
 latched; then one `# end: ...` comment (identify skips it). serial_log() predicts it byte for byte.
-A line is at most ~56 bytes, ~38 at the shipped scenario: 7,600 B/s at 5 ms, under the 11,520 B/s
+A line is at most 55 bytes, 38-42 on the shipped scenario: 8,100 B/s at 5 ms, under the 11,520 B/s
 that 115200 baud (10 bits a byte) carries; a ring of 8 rows absorbs jitter, and a row the ring had no
 room for is counted in the end line.
 """
@@ -30,6 +30,7 @@ from nnik.firmware.servo.export import write_library_files
 
 VERSION = "0.1.0"
 HEADER = "t,u_x,u_y,count_x,count_y"
+SERIAL_BYTES_S = 115200 // 10  # 8N1: 10 bits a byte
 SOURCES = ("nnik_ctl_excite.c", "nnik_ctl.h", "nnik_excite.h")
 
 
@@ -44,6 +45,14 @@ def tick_us(tick_s: float) -> int:
 def _fraction(d: int, duty_max: int) -> str:
     q = (abs(d) * 1_000_000 + duty_max // 2) // duty_max
     return f"{'-' if d < 0 else ''}{q // 1_000_000}.{q % 1_000_000:06d}"
+
+
+def check_serial_rate(text: str, tick_s: float) -> None:
+    """Refuse a log whose longest line, once a tick, is more than 115200 baud carries."""
+    longest = max(len(line) + 1 for line in text.splitlines()[1:-1])
+    if longest / tick_s > SERIAL_BYTES_S:
+        raise NnikError(f"the serial log's lines (up to {longest} bytes a {tick_s * 1e3:g} ms tick, "
+                        f"{longest / tick_s:,.0f} B/s) are more than 115200 baud carries ({SERIAL_BYTES_S:,} B/s)")
 
 
 def serial_log(duty, counts, tick_s: float, duty_max: int, lost: int = 0) -> str:
