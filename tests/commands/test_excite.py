@@ -14,6 +14,8 @@ import subprocess
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from nnik.dynamics.servo.nominal import equivalent_tau_s, nominal_model
 from nnik.machine.scenario import load_scenario
@@ -175,3 +177,53 @@ def test_the_firmware_builds_fits_and_logs_the_plant_on_the_chip(excited, tmp_pa
             assert ids[0][axis][key] == pytest.approx(ids[1][axis][key], rel=1e-4)
         assert ids[0][axis]["tau_s"] == pytest.approx(equivalent_tau_s(cfg, i), rel=0.05)
         assert ids[0][axis]["k_counts_s_v"] == pytest.approx(nominal_model(cfg, i).k_counts_s_v, rel=0.05)
+
+
+@st.composite
+def tables(draw):
+    n = draw(st.integers(1, 40))
+    duty = draw(st.lists(st.tuples(st.integers(-255, 255), st.integers(-255, 255)), min_size=n, max_size=n))
+    counts = draw(st.lists(st.tuples(st.integers(-2**31, 2**31 - 1), st.integers(-2**31, 2**31 - 1)), min_size=n,
+                           max_size=n))
+    return np.array(duty), np.array(counts), draw(st.integers(1, 32768)), draw(st.sampled_from([255, 1023, 100]))
+
+
+@pytest.mark.skipif(shutil.which("gcc") is None, reason="gcc not installed")
+@settings(max_examples=8, deadline=None)
+@given(t=tables())
+def test_the_players_lines_are_serial_logs(t, tmp_path_factory):
+    """nnik_ctl_excite.c on the host (the same C the Uno runs): each tick's line = serial_log's,
+    any duty and int32 count, any whole-microsecond tick; after the table, duty 0 and no line."""
+    from nnik.emit.templating import CODEGEN
+    from nnik.firmware.servo.excite_export import serial_log
+
+    duty, counts, us, duty_max = t
+    tmp = tmp_path_factory.mktemp("player")
+    rows = ",".join("{%d,%d}" % tuple(d) for d in duty.tolist())
+    (tmp / "nnik_excite_duties.h").write_text(
+        f"#include <stdint.h>\n#define NNIK_EXCITE_TICKS {len(duty)}\n#define NNIK_EXCITE_TICK_US {us}UL\n"
+        f"#define NNIK_DUTY_MAX {duty_max}\nstatic const int16_t nnik_excite_duties[][2] = {{{rows}}};\n")
+    pos = ",".join("{%dL,%dL}" % tuple(c) for c in counts.tolist())
+    (tmp / "main.c").write_text(f"""#include <stdio.h>
+#include "nnik_ctl.h"
+#include "nnik_excite.h"
+static const int32_t pos[][2] = {{{pos}}};
+int main(void) {{
+    char buf[NNIK_EXCITE_LINE_MAX]; int32_t ref[2] = {{0, 0}}; int16_t d[2]; unsigned k;
+    nnik_ctl_reset();
+    for (k = 0; k < {len(duty) + 2}; k++) {{
+        nnik_ctl_tick(ref, pos[k < {len(duty)} ? k : 0], d);
+        if (k >= {len(duty)} && (d[0] || d[1])) return 3;
+        while (nnik_excite_line(buf)) fputs(buf, stdout);
+    }}
+    printf("done %u lost %u\\n", nnik_excite_done(), nnik_excite_lost());
+    return 0;
+}}
+""")
+    src = CODEGEN / "arduino" / "src"
+    exe = tmp / "player"
+    subprocess.run(["gcc", "-std=gnu11", "-Wall", "-Werror", "-I", str(tmp), "-I", str(src), str(src / "nnik_ctl_excite.c"),
+                    str(tmp / "main.c"), "-o", str(exe)], check=True)
+    got = subprocess.run([str(exe)], capture_output=True, text=True, check=True).stdout.splitlines()
+    want = serial_log(duty, counts, us * 1e-6, duty_max).splitlines()[1:-1]
+    assert got[:-1] == want and got[-1] == "done 1 lost 0"
