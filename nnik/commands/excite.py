@@ -6,11 +6,14 @@ The amplitude and period come from a step probe of the scenario's plant: A = hal
 (lowered if the swing would leave half the stroke), half period 5 tau on X and 7 tau on Y. Writes
 into -o DIR: duty.csv (t,duty_x,duty_y: the integer duties, +-duty_max), log.csv (the scenario's
 plant driven by them, in the log format `nnik identify` reads: t,u_x,u_y,count_x,count_y in s,
-volts, counts) and nnik_excite_duties.h (the duties as a PROGMEM table for a firmware build that
-plays them on the chip and logs the counts)."""
+volts, counts), nnik_excite_duties.h (the duties as a PROGMEM table) and the firmware build that
+plays them on the Uno: the Arduino library nnik_<scenario>_excite/ with the sketch
+examples/<scenario>_excite/ and its arduino-mk Makefile (nnik.firmware.servo.excite_export), which
+logs every tick over serial (115200 baud) in the format `nnik identify LOG --supply V` reads."""
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 from nnik.commands import common_options as co, option_types as opt
@@ -61,6 +64,10 @@ def c_header(ex, cfg, seed: int, source: str) -> str:
 #include <avr/pgmspace.h>
 
 #define NNIK_EXCITE_TICKS {n}
+#define NNIK_EXCITE_TICK_US {round(cfg.tick_s * 1e6)}UL
+#ifndef NNIK_DUTY_MAX
+#define NNIK_DUTY_MAX {cfg.duty_max}
+#endif
 #define NNIK_EXCITE_START_X {ex.start_counts[0]}L
 #define NNIK_EXCITE_START_Y {ex.start_counts[1]}L
 
@@ -77,6 +84,7 @@ def run(args) -> None:
     from nnik.dynamics.servo.servo_error import ServoError
     from nnik.files.atomic_write import write_file_atomic
     from nnik.files.replace_dir import staged_folder
+    from nnik.firmware.servo.excite_export import check_serial_rate, serial_log, tick_us, write_excite_library
     from nnik.machine.scenario import load_scenario
 
     scn = load_scenario(args.scenario)
@@ -84,6 +92,7 @@ def run(args) -> None:
     if cfg is None:
         raise NnikError("has no [servo] table: nnik excite drives a DC-servo table's plant", args.scenario)
     ticks = int(round(args.seconds / cfg.tick_s))
+    tick_us(cfg.tick_s)
     if 4 * ticks > MAX_TABLE_BYTES:
         raise NnikError(f"{args.seconds:g} s is {ticks} ticks, a {4 * ticks}-byte duty table: more than the "
                         f"{MAX_TABLE_BYTES} bytes of flash it may take; give fewer --seconds", None, "--seconds")
@@ -97,12 +106,18 @@ def run(args) -> None:
         print(f"{name}: step probe K {p.k_counts_s_v:.4g} counts/s/V, tau {p.tau_s:.4g} s -> square +-{a.amplitude_v:g} V, "
               f"half period {a.half_period_ticks} ticks ({a.half_period_ticks * cfg.tick_s:g} s), noise sigma "
               f"{a.sigma_v:.3g} V (sigma^2 = 0.3 x {a.amplitude_v:g})")
+    check_serial_rate(serial_log(ex.duty, ex.counts, cfg.tick_s, cfg.duty_max), cfg.tick_s)
+    name = re.sub(r"\W", "_", Path(args.scenario).stem)
     files = {"duty.csv": duty_csv(cfg.tick_s, ex.duty),
              "log.csv": log_csv(cfg.tick_s, cfg.supply_v, cfg.duty_max, ex.duty, ex.counts),
              "nnik_excite_duties.h": c_header(ex, cfg, args.seed, Path(args.scenario).name)}
     with staged_folder(out, MARKER, "excitation folder", f"nnik excite {args.scenario} --seed {args.seed}\n") as tmp:
-        for name, text in files.items():
-            write_file_atomic(tmp / name, text)
+        for fname, text in files.items():
+            write_file_atomic(tmp / fname, text)
+        lib = write_excite_library(tmp / f"nnik_{name}_excite", cfg, files["nnik_excite_duties.h"], ticks,
+                                   ex.start_counts, name, f"nnik excite {Path(args.scenario).name} --seed {args.seed}")
     span = [f"{name} {ex.table_um[:, i].min() / 1000:.2f}..{ex.table_um[:, i].max() / 1000:.2f} mm"
             for i, name in enumerate("xy")]
     print(f"wrote {out}/: {', '.join(files)} ({ticks} ticks; the table stays within {', '.join(span)})")
+    print(f"firmware: {out}/{lib['libname']}/examples/{lib['example']} (make, then make upload; log its serial output "
+          f"at 115200 baud and run nnik identify LOG --supply {cfg.supply_v:g})")

@@ -24,6 +24,8 @@
  *   the encoder interrupts' cycles and their number since the last answer, the awake cycles since
  *   the last answer (the main loop sleeps, so these are all interrupt work), the longest encoder
  *   interrupt, the chip's encoder counts x, y now.
+ * UART: with NNIK_SERVO_UART=PATH in the environment, every byte the chip sends on UART0 is
+ *   appended to PATH as it leaves the simulated transmitter (simavr paces it at the baud rate).
  * An interrupt's cycles run from the cycle its vector is taken (simavr's instruction boundary,
  * the wake-up included) to the cycle its reti returns (the stack pointer back above its entry).
  *
@@ -46,6 +48,7 @@
 #include <simavr/sim_cycle_timers.h>
 #include <simavr/avr_ioport.h>
 #include <simavr/avr_extint.h>
+#include <simavr/avr_uart.h>
 
 #define CLOCK_HZ 16000000UL
 #define VEC_BYTES 4      /* the ATmega328P's vector slot: a jmp, 4 bytes */
@@ -81,6 +84,31 @@ static int depth;
 static uint64_t enc_cycles, enc_n, enc_max, tick_cycles, awake, tick_entry, tick_end;
 static int tick_done;
 static uint64_t busy_rise, busy_enc0, busy_cycles;
+
+static FILE *uart_log; /* NNIK_SERVO_UART's file, or NULL */
+
+static void on_uart(struct avr_irq_t *irq, uint32_t value, void *param)
+{
+    (void)irq; (void)param;
+    fputc((int)(value & 0xFF), uart_log);
+}
+
+static void capture_uart(void)
+{
+    const char *path = getenv("NNIK_SERVO_UART");
+    uint32_t flags = 0;
+    if (!path || !*path)
+        return;
+    uart_log = fopen(path, "wb");
+    if (!uart_log) {
+        fprintf(stderr, "cannot write %s\n", path);
+        exit(2);
+    }
+    avr_ioctl(avr, AVR_IOCTL_UART_GET_FLAGS('0'), &flags);
+    flags &= ~(uint32_t)(AVR_UART_FLAG_STDIO | AVR_UART_FLAG_POLL_SLEEP);
+    avr_ioctl(avr, AVR_IOCTL_UART_SET_FLAGS('0'), &flags);
+    avr_irq_register_notify(avr_io_getirq(avr, AVR_IOCTL_UART_GETIRQ('0'), UART_IRQ_OUTPUT), on_uart, NULL);
+}
 
 static const int GRAY[4] = {0, 1, 3, 2}; /* phase -> A | B << 1 */
 
@@ -238,6 +266,7 @@ static void load(const char *path)
     for (i = 0; i < 4; i++)
         pin_c[i] = avr_io_getirq(avr, AVR_IOCTL_IOPORT_GETIRQ('C'), i);
     avr_irq_register_notify(avr_io_getirq(avr, AVR_IOCTL_IOPORT_GETIRQ('B'), 5), on_busy, NULL);
+    capture_uart();
     edges = malloc(MAX_EDGES * sizeof *edges);
     if (!edges) {
         fprintf(stderr, "out of memory\n");
@@ -405,6 +434,8 @@ int main(int argc, char **argv)
         if (fwrite(ans, sizeof ans[0], 12, out) != 12)
             return 2;
         fflush(out);
+        if (uart_log)
+            fflush(uart_log);
     }
     return 0;
 }

@@ -14,6 +14,7 @@ interrupts' work: load % = awake cycles / tick cycles * 100.
 
 from __future__ import annotations
 
+import os
 import subprocess
 from dataclasses import dataclass
 from pathlib import Path
@@ -67,7 +68,7 @@ class ChipTrace:
 class ChipSession:
     """The harness process for one run: tick(ref, substep_counts) -> the answer's 12 ints."""
 
-    def __init__(self, fw: ServoFirmware, substeps: int, start_counts, workdir: Path):
+    def __init__(self, fw: ServoFirmware, substeps: int, start_counts, workdir: Path, uart_log: Path | None = None):
         exe = build_harness(Path(workdir) / "harness")
         s = fw.symbols
         self.substeps = substeps
@@ -75,7 +76,8 @@ class ChipSession:
         cmd = [str(exe), str(fw.elf), str(fw.period_cycles), str(substeps), str(s["nnik_servo_feed"]),
                str(s["nnik_servo_count"]), str(s["nnik_servo_pos"]), *(str(int(c)) for c in start_counts)]
         try:
-            self.proc = subprocess.Popen(cmd, stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=self._err)
+            env = None if uart_log is None else dict(os.environ, NNIK_SERVO_UART=str(uart_log))
+            self.proc = subprocess.Popen(cmd, stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=self._err, env=env)
         except OSError as exc:
             raise TargetError(f"servo co-simulation: cannot run {exe}: {exc}") from None
 
@@ -103,12 +105,12 @@ class ChipSession:
 
 
 def run(fw: ServoFirmware, cfg, controller, ref_counts, workdir: Path | None = None, plant=None,
-        start_counts=(0, 0), model_duty=None) -> ChipTrace:
+        start_counts=(0, 0), model_duty=None, uart_log: Path | None = None) -> ChipTrace:
     """Run ref_counts ((N, 2) int, counts) closed loop: the chip (fw) drives `plant` (default
     nnik.dynamics.servo.plant.Plant(cfg, start_counts)); `controller` (the integer Python model,
     reset first) predicts each duty. model_duty(k, duty) may replace the model's duty (a test's
     deliberately wrong model). workdir: where the harness is built and logs (default: beside the
-    firmware's ELF)."""
+    firmware's ELF). uart_log: a file that receives every byte the chip sends on its UART."""
     ref = np.asarray(ref_counts, dtype=np.int64).reshape(-1, 2)
     if len(ref) == 0:
         raise NnikError("servo co-simulation: no ticks in the reference")
@@ -125,7 +127,7 @@ def run(fw: ServoFirmware, cfg, controller, ref_counts, workdir: Path | None = N
     scal = np.zeros((n, 5), np.int64)
     table = np.zeros((n, 2))
     controller.reset()
-    chip = ChipSession(fw, cfg.substeps, start, Path(workdir))
+    chip = ChipSession(fw, cfg.substeps, start, Path(workdir), uart_log)
     rows = np.tile(np.asarray(start, dtype=np.int64), (cfg.substeps, 1))
     try:
         for k in range(n):

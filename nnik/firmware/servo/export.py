@@ -27,6 +27,16 @@ JOB_FLASH_BYTES = FLASH_BYTES - 6 * 1024  # the job's share: the sketch without 
 REPORT_MS = 100
 
 
+def write_library_files(d: Path, ctx: dict, properties_j2: str, ino_j2: str) -> None:
+    """library.properties and the example ctx["example"] (its .ino and arduino-mk Makefile) in d."""
+    env = _env()
+    (d / "library.properties").write_text(env.get_template(properties_j2).render(**ctx))
+    ex = d / "examples" / ctx["example"]
+    ex.mkdir(parents=True)
+    (ex / f"{ctx['example']}.ino").write_text(env.get_template(ino_j2).render(**ctx))
+    (ex / "Makefile").write_text(env.get_template("Makefile.j2").render(**ctx))
+
+
 def export_servo_library(libdir: Path, cfg, controller, ref_counts, start=(0, 0), name: str = "xy_table",
                          source: str = "nnik") -> dict:
     """Write the library; returns {"libname", "dir", "example", "job_bytes", "ticks"}. A job that
@@ -62,10 +72,5 @@ def export_servo_library(libdir: Path, cfg, controller, ref_counts, start=(0, 0)
         cfg_h.write_text(cfg_h.read_text().replace("#endif /* NNIK_SERVO_CONFIG_H */",
                                                    f"#ifndef NNIK_SERVO_OCR1A\n#define NNIK_SERVO_OCR1A {ocr}  /* the tick: "
                                                    f"{cfg.tick_s * 1e3:g} ms */\n#endif\n\n#endif /* NNIK_SERVO_CONFIG_H */"))
-        env = _env()
-        (d / "library.properties").write_text(env.get_template("servo_library.properties.j2").render(**ctx))
-        ex = d / "examples" / example
-        ex.mkdir(parents=True)
-        (ex / f"{example}.ino").write_text(env.get_template("servo.ino.j2").render(**ctx))
-        (ex / "Makefile").write_text(env.get_template("Makefile.j2").render(**ctx))
+        write_library_files(d, ctx, "servo_library.properties.j2", "servo.ino.j2")
     return {"libname": libname, "dir": str(final), "example": example, "job_bytes": len(data), "ticks": len(ref)}
