@@ -6,6 +6,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from nnik import pipeline
+from nnik.errors import NnikError
 from nnik.commands import common_options as co
 from nnik.commands.model_dirs import add_model_dir, evaluated_dir
 from nnik.report.console import console, print_accuracy
@@ -24,10 +25,23 @@ def register(sub) -> None:
     add_model_dir(p)
     p.add_argument("--arduino", metavar="DIR", help="also write the pick's Arduino/PlatformIO library to this "
                    "directory (self-test and G-code example sketches)")
+    p.add_argument("--job", metavar="JOB.gcode", help="a dc_servo xy_table: the job the library stores in flash "
+                   "(default: the seed's circle, datasets/jobs/servo_circle.gcode)")
+    p.add_argument("--controller", choices=("pid", "pdff", "ccc"),
+                   help="a dc_servo xy_table: the tuned controller to export (default: the one `nnik run` chose)")
     p.set_defaults(func=cmd_export)
 
 
 def cmd_export(args) -> None:
+    from nnik.job.servo_dir import is_servo_dir
+
+    if is_servo_dir(Path(args.model_dir)):  # a DC-servo xy_table: the controller's library (nnik.commands.servo_export)
+        from nnik.commands.servo_export import cmd_servo_export
+
+        return cmd_servo_export(args)
+    if args.job is not None or args.controller is not None:
+        raise NnikError("only a dc_servo xy_table's export stores a job and names a controller", None,
+                        "--job" if args.job is not None else "--controller")
     out = evaluated_dir(args.model_dir)
     if args.arduino is not None:
         from nnik.files.pick_state import require_deliverable

@@ -102,3 +102,26 @@ def test_an_open_loop_option_on_the_xy_table_is_one_line(xy_run):
     out, _ = xy_run
     r = nnik("job", out, JOBS / "servo_step_x25.gcode", "--shaper", "zv")
     assert r.returncode == 2 and r.stderr.count("\n") == 1 and "--shaper" in r.stderr
+
+
+def test_nnik_export_writes_the_servo_library_with_the_stored_circle(xy_run, tmp_path):
+    """`nnik export OUTDIR --arduino DIR` on the xy_table: the chosen controller's library storing the
+    seed's circle (the default job), and --job/--controller choose another; an open-loop model
+    directory's export has no --job; an oversized job is one line, nothing written."""
+    from nnik.firmware.servo.export import JOB_FLASH_BYTES
+
+    out, _ = xy_run
+    chosen = json.loads((out / "servo" / "gains.json").read_text())["chosen"]
+    r = nnik("export", out, "--arduino", tmp_path / "lib")
+    assert r.returncode == 0, r.stderr
+    assert f"example xy_table_servo: {chosen}, job servo_circle.gcode" in r.stdout
+    assert (tmp_path / "lib" / "examples" / "xy_table_servo").is_dir()
+    config = next((tmp_path / "lib" / "src").glob("nnik_servo_config.h")).read_text()
+    assert f"NNIK_CTL_{chosen.upper()} 1" in config
+    r = nnik("export", out, "--arduino", tmp_path / "lib2", "--job", JOBS / "servo_step_x25.gcode", "--controller", "pid")
+    assert r.returncode == 0 and "example xy_table_servo: pid, job servo_step_x25.gcode" in r.stdout, r.stderr
+    long_job = tmp_path / "long.gcode"  # raw steps 10 mm apart, each stored as a 9-byte jump: too many
+    long_job.write_text("G21 G90\n" + "".join(f";@step X{10 + 10 * (k % 2)} Y10\n" for k in range(JOB_FLASH_BYTES // 9 + 9)))
+    r = nnik("export", out, "--arduino", tmp_path / "lib3", "--job", long_job)
+    assert r.returncode == 2 and r.stderr.count("\n") == 1 and "do not fit" in r.stderr, r.stderr
+    assert not (tmp_path / "lib3").exists()

@@ -1,6 +1,6 @@
 """Pack a per-tick reference (counts) into the stored job's bytes (format: codegen/arduino/src/
 nnik_servo_job.h): one byte a tick while both axes move by -7..7 counts (the seed's circle at
-about 1 mm/s moves 2 counts a tick), 3 bytes for a hold of any length, 9 for a jump (a step).
+about 1 mm/s moves 2 counts a tick), 3 bytes a tick while they move by -127..127 (a rapid), 2 bytes for up to 255 more ticks of the same move, a zero move for a hold of one or two ticks, 3 bytes for a longer hold, 9 for a jump (a step).
 `unpack` is the player's model: unpack(pack(ref)) == ref, checked against the C on the host."""
 
 from __future__ import annotations
@@ -9,7 +9,8 @@ import numpy as np
 
 from nnik.errors import NnikError
 
-JUMP, HOLD = 0x88, 0x80
+JUMP, HOLD, WIDE, REPEAT = 0x88, 0x80, 0x08, 0x81  # codes with a -8 nibble: outside the -7..7 moves
+MIN_REPEAT = 3  # a run of the last move this long or longer costs 2 bytes instead of one a tick
 
 
 def pack(ref_counts, start=(0, 0)) -> bytes:
@@ -27,38 +28,60 @@ def pack(ref_counts, start=(0, 0)) -> bytes:
             n = 1
             while k + n < len(ref) and n < 0xFFFF and (ref[k + n] == prev).all():
                 n += 1
-            out += bytes([HOLD, n & 0xFF, n >> 8])
+            # a short hold as zero moves (one byte a tick), a longer one as HOLD (3 bytes)
+            out += bytes(n) if n < 3 else bytes([HOLD, n & 0xFF, n >> 8])
             k += n
             continue
         if (np.abs(d) <= 7).all():
             out.append(((int(d[0]) & 0xF) << 4) | (int(d[1]) & 0xF))
+        elif (np.abs(d) <= 127).all():  # a rapid's tick: three bytes
+            out += bytes([WIDE, int(d[0]) & 0xFF, int(d[1]) & 0xFF])
         else:
             out.append(JUMP)
             out += int(ref[k, 0]).to_bytes(4, "little", signed=True) + int(ref[k, 1]).to_bytes(4, "little", signed=True)
         prev = ref[k]
         k += 1
+        n = 0
+        while (np.abs(d) <= 127).all() and k + n < len(ref) and n < 0xFF and (ref[k + n] - ref[k + n - 1] == d).all():
+            n += 1
+        if n >= MIN_REPEAT:  # the same move again n ticks (a line or a flat stretch of an arc)
+            out += bytes([REPEAT, n])
+            k += n
+            prev = ref[k - 1]
     return bytes(out)
 
 
 def unpack(data: bytes, start, ticks: int) -> np.ndarray:
     """The player's references for `ticks` ticks (the last one held after the job)."""
     ref = [int(start[0]), int(start[1])]
-    rows, at, hold = [], 0, 0
+    rows, at, hold, repeat, last = [], 0, 0, 0, (0, 0)
     for _ in range(ticks):
         if hold:
             hold -= 1
+        elif repeat:
+            repeat -= 1
+            ref = [ref[0] + last[0], ref[1] + last[1]]
         elif at < len(data):
             b = data[at]
             if b == JUMP:
                 ref = [int.from_bytes(data[at + 1:at + 5], "little", signed=True),
                        int.from_bytes(data[at + 5:at + 9], "little", signed=True)]
                 at += 9
+            elif b == WIDE:
+                last = ((data[at + 1] ^ 0x80) - 0x80, (data[at + 2] ^ 0x80) - 0x80)
+                ref = [ref[0] + last[0], ref[1] + last[1]]
+                at += 3
+            elif b == REPEAT:
+                repeat = data[at + 1] - 1  # this tick is the repeat's first
+                ref = [ref[0] + last[0], ref[1] + last[1]]
+                at += 2
             elif b == HOLD:
                 hold = data[at + 1] | data[at + 2] << 8
                 at += 3
                 hold -= 1
             else:
-                ref = [ref[0] + ((b >> 4) ^ 8) - 8, ref[1] + ((b & 0xF) ^ 8) - 8]
+                last = (((b >> 4) ^ 8) - 8, ((b & 0xF) ^ 8) - 8)
+                ref = [ref[0] + last[0], ref[1] + last[1]]
                 at += 1
         rows.append(list(ref))
     return np.array(rows, dtype=np.int64).reshape(-1, 2)
