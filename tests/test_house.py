@@ -50,3 +50,14 @@ def test_no_python_file_is_over_500_lines():
     long = {str(p.relative_to(ROOT)): n for top in ("nnik", "tests", "scripts") for p in (ROOT / top).rglob("*.py")
             if (n := len(p.read_text().splitlines())) > MAX_LINES}
     assert not long, long
+
+
+def test_no_two_test_modules_share_a_name():
+    """pytest imports a test folder without __init__.py by the file's basename: two test_x.py in two
+    folders stop the whole run at collection ("import file mismatch")."""
+    seen: dict[str, Path] = {}
+    for p in sorted((ROOT / "tests").rglob("*.py")):
+        if p.name in ("__init__.py", "conftest.py") or (p.parent / "__init__.py").is_file():
+            continue
+        assert p.name not in seen, f"{p.relative_to(ROOT)} and {seen[p.name].relative_to(ROOT)}: rename one"
+        seen[p.name] = p
