@@ -1,6 +1,6 @@
 """Run a controller's C against its Python model: on the host (gcc with sanitizers, the driver
 codegen/harness/host/ctl_driver.c) and on the ATmega328P under simavr (the IK harness times each
-tick through codegen/harness/avr/nnik_ctl_wrap.c), from rows of (ref_x, ref_y, pos_x, pos_y)."""
+tick through codegen/harness/servo/nnik_ctl_wrap.c), from rows of (ref_x, ref_y, pos_x, pos_y)."""
 
 from __future__ import annotations
 
@@ -59,7 +59,7 @@ def avr_run(controller, rows, workdir: Path | None = None) -> dict:
     with tempfile.TemporaryDirectory() as tmp:
         d = Path(workdir or tmp)
         srcs = write_controller_c(controller, d / "src")
-        wrap = CODEGEN / "harness" / "avr" / "nnik_ctl_wrap.c"
+        wrap = CODEGEN / "harness" / "servo" / "nnik_ctl_wrap.c"
         res = run_avr([wrap, *srcs], [d / "src"], "nnik_ctl", rows, workdir=d, n_out=2, batch_size=len(rows),
                       progress=False)
     return {"duty": res["outputs"], "cycles": res["cycles"], "flash_bytes": res["model_flash_bytes"],
