@@ -24,9 +24,12 @@ SETTINGS = settings(max_examples=40, deadline=None, suppress_health_check=[Healt
 
 @st.composite
 def tick_and_tau(draw):
-    """A tick of 1, 5 or 10 ms and a tau of at least 4 of them, up to 300 ms."""
+    """A tick of 1, 5 or 10 ms and a tau of at least 4 of them and at least 20 ms (the issue's
+    floor: 4 ticks of 5 ms), up to 300 ms. Below 20 ms at a 1 ms tick, a slow axis moves about a
+    count a tick and 2 counts of noise bury it: hypothesis found tau 13 % and K 12 % off there
+    (tau 7.8 ms, K 245 counts/s/V), outside what the issue asks and what the docs claim."""
     tick = draw(st.sampled_from([0.001, 0.005, 0.01]))
-    return tick, draw(st.floats(4 * tick, 0.3))
+    return tick, draw(st.floats(max(4 * tick, 0.02), 0.3))
 
 
 @SETTINGS
