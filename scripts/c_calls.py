@@ -34,9 +34,9 @@ EVERY_OPTION = {"NNIK_GC_G5": "1", "NNIK_GC_G93": "1", "NNIK_GC_PLANES": "1", "N
 # (tool, rule) builds whose union is compiled: a laser by S, a pen by Z (its tool code out of line),
 # a pen by E (inline)
 TOOL_BUILDS = ((0, 0), (1, 1), (1, 2))
-# src/ also holds the closed-loop XY table's C (issue 28: the controllers nnik_ctl_*, the servo
+# src/ also holds the closed-loop XY table's C (the controllers nnik_ctl_*, the excitation player nnik_excite*, the servo
 # runtime nnik_servo*), built and exported on their own (nnik.firmware.servo), not the G-code engine
-CLOSED_LOOP = ("nnik_ctl", "nnik_servo")
+CLOSED_LOOP = ("nnik_ctl", "nnik_servo", "nnik_excite")
 
 
 def engine_files(src: Path = SRC, suffixes=(".c",)) -> list[Path]:
