@@ -47,7 +47,8 @@ def compile_flags(opt: str, extra: Sequence[str] = ()) -> List[str]:
             "-ffunction-sections", "-fdata-sections", *extra]
 
 
-def _sizes(elf: Path, wd: Path) -> Dict[str, int]:
+def elf_sizes(elf: Path, wd: Path) -> Dict[str, int]:
+    """An AVR ELF's flash (.text + .data) and RAM (.data + .bss + .noinit), bytes (avr-size -A)."""
     res = run([find_tool("avr-size"), "-A", elf], "avr-size", cwd=wd)
     sec: Dict[str, int] = {}
     for line in res.stdout.splitlines():
@@ -143,8 +144,8 @@ def run_avr(sources: Sequence[Path], include_dirs: Sequence[Path], name: str, ve
     stub_obj = wd / "stub.o"
     run([gcc, *flags, f"-DNNIK_IK={name}_ik", f"-DNNIK_N_IN={n_in}", f"-DNNIK_N_OUT={n_out}",
          "-c", stub, "-o", stub_obj], "avr-gcc stub", cwd=wd, log=wd / "stub.log")
-    size_model = _sizes(build("size_model", vec[:1], objs), wd)
-    size_stub = _sizes(build("size_stub", vec[:1], [stub_obj]), wd)
+    size_model = elf_sizes(build("size_model", vec[:1], objs), wd)
+    size_stub = elf_sizes(build("size_stub", vec[:1], [stub_obj]), wd)
 
     def link_size_main(tag: str, call: int, model_objs: List[Path]) -> str:
         bdir = wd / tag

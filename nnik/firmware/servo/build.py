@@ -14,6 +14,7 @@ from nnik.emit.templating import CODEGEN
 from nnik.errors import NnikError
 from nnik.firmware.gcode.chip import _build_host_tool
 from nnik.implementations.servo.emit_c import write_controller_c
+from nnik.targets.avr import elf_sizes
 from nnik.targets.toolchain import HARNESS_DIR, TargetError, find_tool, run
 
 CLOCK_HZ = 16_000_000
@@ -60,16 +61,6 @@ def copy_runtime(outdir: Path) -> list[Path]:
     return [outdir / f for f in RUNTIME]
 
 
-def _sizes(elf: Path, cwd: Path) -> tuple[int, int]:
-    res = run([find_tool("avr-size"), "-A", elf], "avr-size", cwd=cwd)
-    sec = {}
-    for line in res.stdout.splitlines():
-        parts = line.split()
-        if len(parts) >= 2 and parts[0].startswith(".") and parts[1].isdigit():
-            sec[parts[0]] = int(parts[1])
-    return sec.get(".text", 0) + sec.get(".data", 0), sec.get(".data", 0) + sec.get(".bss", 0)
-
-
 def _symbols(elf: Path, cwd: Path, names=SYMBOLS) -> dict:
     res = run([find_tool("avr-nm"), elf], "avr-nm", cwd=cwd)
     found = {}
@@ -97,7 +88,8 @@ def build_firmware(controller, tick_s: float, workdir: Path) -> ServoFirmware:
     run([find_tool("avr-gcc"), f"-mmcu={MCU}", f"-DF_CPU={CLOCK_HZ}UL", f"-DNNIK_SERVO_OCR1A={ocr}", "-Os", "-Wall",
          "-std=gnu11", "-ffunction-sections", "-fdata-sections", "-Wl,--gc-sections", f"-I{src}", *srcs, "-o", elf],
         "build the servo firmware", cwd=workdir, log=workdir / "build.log")
-    flash, ram = _sizes(elf, workdir)
+    size = elf_sizes(elf, workdir)
+    flash, ram = size["flash"], size["ram"]
     if flash > FLASH_BYTES or ram > RAM_BYTES:
         raise TargetError(f"servo firmware does not fit the Uno: flash {flash} of {FLASH_BYTES} B, RAM {ram} of {RAM_BYTES} B")
     return ServoFirmware(elf, ocr, flash, ram, _symbols(elf, workdir))
@@ -107,7 +99,8 @@ def sketch_firmware(elf: Path, tick_s: float) -> ServoFirmware:
     """An exported sketch's ELF (it plays its own stored job: no reference feed) for the
     co-simulation."""
     elf = Path(elf).resolve()
-    flash, ram = _sizes(elf, elf.parent)
+    size = elf_sizes(elf, elf.parent)
+    flash, ram = size["flash"], size["ram"]
     syms = _symbols(elf, elf.parent, ("nnik_servo_count", "nnik_servo_pos"))
     return ServoFirmware(elf, tick_ocr1a(tick_s), flash, ram, {**syms, "nnik_servo_feed": 0})
 

@@ -32,9 +32,10 @@ def pack(ref_counts, start=(0, 0)) -> bytes:
             out += bytes(n) if n < 3 else bytes([HOLD, n & 0xFF, n >> 8])
             k += n
             continue
-        if (np.abs(d) <= 7).all():
+        step = int(np.abs(d).max())
+        if step <= 7:
             out.append(((int(d[0]) & 0xF) << 4) | (int(d[1]) & 0xF))
-        elif (np.abs(d) <= 127).all():  # a rapid's tick: three bytes
+        elif step <= 127:  # a rapid's tick: three bytes
             out += bytes([WIDE, int(d[0]) & 0xFF, int(d[1]) & 0xFF])
         else:
             out.append(JUMP)
@@ -42,8 +43,8 @@ def pack(ref_counts, start=(0, 0)) -> bytes:
         prev = ref[k]
         k += 1
         n = 0
-        while (np.abs(d) <= 127).all() and k + n < len(ref) and n < 0xFF and (ref[k + n] - ref[k + n - 1] == d).all():
-            n += 1
+        while step <= 127 and k + n < len(ref) and n < 0xFF and (ref[k + n] - ref[k + n - 1] == d).all():
+            n += 1  # a jump sets no move to repeat
         if n >= MIN_REPEAT:  # the same move again n ticks (a line or a flat stretch of an arc)
             out += bytes([REPEAT, n])
             k += n
