@@ -30,6 +30,22 @@ def held_interrupt():
         signal.pthread_sigmask(signal.SIG_SETMASK, old)
 
 
+@contextmanager
+def temporary_folder(make):
+    """The folder make() creates, removed however the block ends. It is made with Ctrl-C held, so
+    an interrupt lands either before it exists or once its removal is already promised (a
+    SIGINT between the mkdir and the try used to leave it behind)."""
+    path = None
+    try:
+        with held_interrupt():
+            path = make()
+        yield path
+    finally:
+        if path is not None:
+            with held_interrupt():
+                shutil.rmtree(path, ignore_errors=True)
+
+
 def reraise_lost_interrupts() -> None:
     """A Ctrl-C that lands in a finaliser or a weakref callback (matplotlib has many) is
     'ignored' by Python with a traceback on stderr, and the command would run on: raise it
@@ -112,8 +128,7 @@ class Staged:
 
     def commit(self) -> list[Path]:
         self.root.mkdir(parents=True, exist_ok=True)
-        tmp = Path(tempfile.mkdtemp(prefix=".staging-", dir=self.root))
-        try:
+        with temporary_folder(lambda: Path(tempfile.mkdtemp(prefix=".staging-", dir=self.root))) as tmp:
             for rel, data in self.files.items():
                 p = tmp / rel
                 p.parent.mkdir(parents=True, exist_ok=True)
@@ -126,6 +141,3 @@ class Staged:
                     os.replace(tmp / rel, dest)
                     out.append(dest)
             return out
-        finally:
-            with held_interrupt():
-                shutil.rmtree(tmp, ignore_errors=True)

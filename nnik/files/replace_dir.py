@@ -6,11 +6,11 @@ empty: a user's own folder is never wiped."""
 
 from __future__ import annotations
 
-import shutil
 from contextlib import contextmanager
 from pathlib import Path
 
 from nnik.errors import NnikError
+from nnik.files.atomic_write import temporary_folder
 from nnik.files.output_path import parent_ok, replace_dir, staging_dir
 
 
@@ -32,10 +32,7 @@ def staged_folder(dest: Path, marker: str, what: str, stamp: str):
     holding `stamp`); on failure dest is as it was."""
     dest = Path(dest)
     check_replaceable(dest, marker, what)
-    tmp = staging_dir(dest)
-    try:
+    with temporary_folder(lambda: staging_dir(dest)) as tmp:
         yield tmp
         (tmp / marker).write_text(stamp)
         replace_dir(tmp, dest)
-    finally:
-        shutil.rmtree(tmp, ignore_errors=True)

@@ -3,10 +3,9 @@
 from __future__ import annotations
 
 import os
-import shutil
 from pathlib import Path
 
-from nnik.files.atomic_write import fsync_dir, held_interrupt
+from nnik.files.atomic_write import fsync_dir, held_interrupt, temporary_folder
 from nnik.files.output_path import staging_dir
 
 from nnik.report import (accuracy, files, implementations, jobs, reference, references, scenario, search_front, summary,
@@ -41,8 +40,7 @@ def write_report(model_dir: Path, out_dir: Path | None = None) -> Path:
     out_dir.mkdir(parents=True, exist_ok=True)
     # built whole in a folder beside, then moved in file by file (pictures first, index.html last):
     # a full disk or a kill while building leaves the earlier report as it was
-    stage = staging_dir(out_dir)
-    try:
+    with temporary_folder(lambda: staging_dir(out_dir)) as stage:
         sections = build_sections(inp, stage)
         (stage / "report.md").write_text(render_markdown(sections, inp.metrics), encoding="utf-8")
         (stage / "index.html").write_text(render_html(sections, inp.metrics), encoding="utf-8")
@@ -54,7 +52,4 @@ def write_report(model_dir: Path, out_dir: Path | None = None) -> Path:
             for p in made:
                 os.replace(p, out_dir / p.name)
         fsync_dir(out_dir)
-    finally:
-        with held_interrupt():
-            shutil.rmtree(stage, ignore_errors=True)
     return out_dir / "index.html"
