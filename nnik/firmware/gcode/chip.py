@@ -20,6 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from nnik.firmware.gcode.simrun import ChipRun  # noqa: F401  (chip.ChipRun, as before)
+from nnik.targets.avr import elf_sizes
 from nnik.targets.toolchain import HARNESS_DIR, TargetError, find_tool, run
 
 CORE_ROOT = Path(os.environ.get("NNIK_ARDUINO_AVR", "/usr/share/arduino/hardware/arduino/avr"))
@@ -171,13 +172,8 @@ def build_sketch(libdir: Path, example: str, workdir: Path, defines: dict | None
     elf = bdir / f"{example}.elf"
     run([find_tool("avr-gcc"), f"-mmcu={m.name}", "-Os", "-Wl,--gc-sections", "-o", elf, *objs, core, "-lm"],
         f"link {example}", cwd=bdir, log=bdir / "link.log")
-    res = run([find_tool("avr-size"), "-A", elf], "avr-size", cwd=bdir)
-    sec = {}
-    for line in res.stdout.splitlines():
-        parts = line.split()
-        if len(parts) >= 2 and parts[0].startswith(".") and parts[1].isdigit():
-            sec[parts[0]] = int(parts[1])
-    fw = Firmware(elf, sec.get(".text", 0) + sec.get(".data", 0), sec.get(".data", 0) + sec.get(".bss", 0), mcu)
+    size = elf_sizes(elf, bdir)
+    fw = Firmware(elf, size["flash"], size["ram"], mcu)
     if fw.flash_bytes > m.flash_bytes or fw.ram_bytes > m.ram_bytes:
         raise TargetError(f"{example} does not fit the {mcu}: flash {fw.flash_bytes} of {m.flash_bytes} B, "
                           f"RAM {fw.ram_bytes} of {m.ram_bytes} B")
