@@ -72,6 +72,18 @@ def test_a_wrong_model_is_caught(tmp_path):
     assert tr.mismatches == 1 and tr.mismatch_ticks.tolist() == [17]
 
 
+def test_a_wrong_weight_checksum_is_caught(tmp_path):
+    """The duties agree but the model's checksum is off at one tick: that tick mismatches. A
+    fixed-gain controller's chip never sets its nnik_ctl_sum: the harness reads it as 0, as the model."""
+    cfg = shipped_cfg()
+    ref = np.tile([400, -300], (30, 1))
+    fw = firmware("ccc", cfg, tmp_path)
+    assert fw.symbols["nnik_ctl_sum"] > 0  # the chip's own variable is read
+    tr = run(fw, cfg, controller("ccc", cfg), ref, tmp_path / "run", model_sum=lambda k, s: s + (k == 9))
+    assert tr.mismatch_ticks.tolist() == [9] and (tr.chip_duty == tr.model_duty).all()
+    assert (tr.chip_sum == 0).all() and tr.model_sum.tolist() == [int(k == 9) for k in range(30)]
+
+
 @pytest.mark.parametrize("tick_s", [0.0, 1e-7, 0.0333, 0.05, 0.0050001])
 def test_a_tick_timer1_cannot_make_is_refused(tick_s):
     with pytest.raises(NnikError, match="Timer1"):
