@@ -1,0 +1,219 @@
+"""The honest comparison (issue 29, item 7): every controller against every plant on every shipped
+closed-loop test, in Python (the controller's integer model against the plant, as
+nnik.dynamics.servo.closed_loop.simulate runs it), under the same limits (duty +-duty_max, the
+same tick and encoder).
+
+Plants (nnik.dynamics.servo.drift):
+- nominal:   the scenario's plant (what the identified models were fitted to);
+- drift:     the scenario's plant drifting over each job (load +50 %, friction x2, supply -20 %,
+             ramped in drift.PIECES pieces: nominal in the first, fully drifted in the last);
+- differing: the scenario's plant with J x1.4, Ra x1.2, friction x1.5, Ke x0.9 from the start.
+Every controller starts each job from power-on (reset(): the neural ones from their pretrained
+weights) and the neural ones learn online throughout.
+
+Measures (nnik.job.servo_measure, on the carriage's true position): contour error max and RMS,
+the largest contour error near a reversal, the steady-state error (the largest over the job's
+steps), the share of saturated ticks; for the neural controllers the weight clamps and updates.
+A run is flagged `diverged` when its clamps pass 1 % of its updates, or when its largest contour
+error passes 10x the tuned PID's largest on the same job and plant.
+
+Output: OUT/compare.md (one table per job: plant x controller, and the headline: who has the
+lowest RMS contour error per job and plant, and where a baseline beats both neural controllers),
+OUT/compare.json (every figure) and, per neural controller and job, a learning-curve PNG: the
+contour error and the weight norm against time on each plant (the tuned PID's error beside it).
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+
+from nnik.files.atomic_write import write_file_atomic
+
+PLANTS = ("nominal", "drift", "differing")
+BASELINES = ("pid", "pdff", "ccc")
+NEURAL = ("nn_axes", "nn_vector")
+DIVERGED_CLAMP_SHARE = 0.01
+DIVERGED_PID_FACTOR = 10.0
+
+
+def make_controller(kind: str, gains: dict, cfg):
+    """The controller `kind` from its gains (a baseline) or its params (a neural one)."""
+    from nnik.implementations import servo
+
+    if kind in servo.KINDS:
+        return servo.make(kind, gains, cfg)
+    from nnik.implementations.servo import nn
+
+    return nn.make(kind, gains, cfg)
+
+
+def make_plant(name: str, cfg, ticks: int, start: tuple[int, int]):
+    from nnik.dynamics.servo.drift import JOB_DRIFT, PIECES, DriftPlant, differing
+    from nnik.dynamics.servo.plant import Plant
+
+    if name == "nominal":
+        return Plant(cfg, start)
+    if name == "drift":
+        return DriftPlant(cfg, ticks, JOB_DRIFT, PIECES, start)
+    if name == "differing":
+        return Plant(differing(cfg), start)
+    raise ValueError(f"unknown plant {name!r} (known: {', '.join(PLANTS)})")
+
+
+def run_one(kind: str, gains: dict, cfg, ref, plant_name: str) -> tuple[dict, dict]:
+    """(figures, curves) of one controller on one plant over one Reference."""
+    from nnik.dynamics.servo.closed_loop import simulate
+    from nnik.job.servo_measure import measure
+
+    ctl = make_controller(kind, gains, cfg)
+    counts = np.asarray(ref.counts)
+    start = tuple(int(c) for c in counts[0])
+    norms = np.zeros(len(counts))
+    norm = getattr(ctl, "weight_norm", None)
+
+    def after(k: int) -> None:
+        norms[k] = norm()
+
+    trace = simulate(cfg, ctl, counts, plant=make_plant(plant_name, cfg, len(counts), start),
+                     after_tick=after if norm else None)
+    fig, contour = measure(ref, trace)
+    steady = [s["steady_state_um"] for s in fig["steps"]]
+    clamps, updates = int(getattr(ctl, "clamps", 0)), int(getattr(ctl, "updates", 0))
+    out = {"contour_max_um": fig["contour_um"]["max_um"], "contour_rms_um": fig["contour_um"]["rms_um"],
+           "reversal_max_um": fig["reversals"]["max_um"], "steady_state_um": max(steady) if steady else None,
+           "saturated_fraction": fig["saturated_fraction"], "final_error_um": fig["final_error_um"],
+           "clamps": clamps, "updates": updates,
+           "clamp_share": clamps / updates if updates else 0.0}
+    return out, {"contour_um": contour, "weight_norm": norms if norm else None}
+
+
+def _diverged(r: dict, pid: dict | None) -> bool:
+    return bool(r["clamp_share"] > DIVERGED_CLAMP_SHARE
+                or (pid is not None and r["contour_max_um"] > DIVERGED_PID_FACTOR * pid["contour_max_um"]))
+
+
+def compare(scn, gains: dict, out_dir: Path, say=print, jobs=None, plants=PLANTS) -> dict:
+    """Run every controller in `gains` (kind -> gains or neural params) on every plant and job (default:
+    the shipped closed-loop tests, nnik.commands' TESTS order given by the caller, else every
+    datasets/jobs/servo_*.gcode and the reference job); write OUT/compare.md, compare.json and the
+    learning curves. Returns {"results": job -> plant -> kind -> figures, "headline": [...],
+    "markdown": path, "figures": [png paths]}."""
+    from nnik.job.parse import JobRequest
+    from nnik.job.reference import job_reference
+
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    cfg = scn.servo
+    jobs = list(jobs) if jobs is not None else default_jobs()
+    kinds = [k for k in (*BASELINES, *NEURAL) if k in gains]
+    results, pngs = {}, []
+    for job in jobs:
+        _, ref = job_reference(JobRequest(Path(job), scn))
+        name = Path(job).name
+        results[name], learning = {}, {}
+        for plant in plants:
+            row, curves = {}, {}
+            for kind in kinds:
+                row[kind], curves[kind] = run_one(kind, gains[kind], cfg, ref, plant)
+            for kind in kinds:
+                row[kind]["diverged"] = _diverged(row[kind], row.get("pid"))
+                if curves[kind]["weight_norm"] is not None:
+                    learning.setdefault(kind, {})[plant] = (curves[kind], curves.get("pid"))
+            results[name][plant] = row
+            say(f"compare {name} on the {plant} plant: " + ", ".join(
+                f"{k} {row[k]['contour_rms_um']:.1f}" for k in kinds) + " um RMS contour")
+        for kind, by_plant in learning.items():
+            pngs.append(learning_curve(out_dir / f"learning_{Path(name).stem}_{kind}.png",
+                                       f"{kind} on {name}: learning online", by_plant, ref.tick_s))
+    headline = headlines(results)
+    md = out_dir / "compare.md"
+    write_file_atomic(md, markdown(results, headline, pngs, out_dir))
+    write_file_atomic(out_dir / "compare.json", json.dumps({"results": results, "headline": headline}, indent=2) + "\n")
+    return {"results": results, "headline": headline, "markdown": str(md), "figures": [str(p) for p in pngs]}
+
+
+def default_jobs() -> list[Path]:
+    jobs = Path(__file__).resolve().parents[2] / "datasets" / "jobs"
+    return sorted(jobs.glob("servo_*.gcode")) + [jobs / "xy_table_reference.gcode"]
+
+
+def headlines(results: dict) -> list[dict]:
+    """Per job and plant: the lowest RMS contour error's controller, the best neural and the best
+    baseline, and whether a baseline wins."""
+    out = []
+    for job, by_plant in results.items():
+        for plant, row in by_plant.items():
+            best = min(row, key=lambda k: row[k]["contour_rms_um"])
+            base = [k for k in row if k in BASELINES]
+            nn = [k for k in row if k in NEURAL]
+            h = {"job": job, "plant": plant, "best": best, "best_rms_um": row[best]["contour_rms_um"]}
+            if base:
+                b = min(base, key=lambda k: row[k]["contour_rms_um"])
+                h.update(best_baseline=b, best_baseline_rms_um=row[b]["contour_rms_um"])
+            if nn:
+                n = min(nn, key=lambda k: row[k]["contour_rms_um"])
+                h.update(best_neural=n, best_neural_rms_um=row[n]["contour_rms_um"])
+            h["baseline_wins"] = best in BASELINES
+            out.append(h)
+    return out
+
+
+def _f(v, nd=1) -> str:
+    return "–" if v is None else f"{v:.{nd}f}"
+
+
+def markdown(results: dict, headline: list[dict], pngs: list[Path], out_dir: Path) -> str:
+    lines = ["# Neural controllers against the tuned baselines", "",
+             "Python integer models against the plant; contour errors in µm on the carriage's true position. "
+             "`diverged`: clamps over 1 % of updates, or a largest contour error over 10x the tuned PID's on the "
+             "same job and plant.", "", "## Headline (lowest RMS contour error)", "",
+             "| job | plant | best | best baseline | best neural | a baseline wins |", "|---|---|---|---|---|---|"]
+    for h in headline:
+        lines.append(f"| {h['job']} | {h['plant']} | {h['best']} ({_f(h['best_rms_um'])}) | "
+                     f"{h.get('best_baseline', '–')} ({_f(h.get('best_baseline_rms_um'))}) | "
+                     f"{h.get('best_neural', '–')} ({_f(h.get('best_neural_rms_um'))}) | "
+                     f"{'yes' if h['baseline_wins'] else 'no'} |")
+    for job, by_plant in results.items():
+        lines += ["", f"## {job}", "",
+                  "| plant | controller | contour max | contour RMS | at reversals | steady state | saturated % "
+                  "| clamps / updates | diverged |", "|---|---|---|---|---|---|---|---|---|"]
+        for plant, row in by_plant.items():
+            for kind, r in row.items():
+                lines.append(f"| {plant} | {kind} | {_f(r['contour_max_um'])} | {_f(r['contour_rms_um'])} | "
+                             f"{_f(r['reversal_max_um'])} | {_f(r['steady_state_um'])} | "
+                             f"{100 * r['saturated_fraction']:.1f} | {r['clamps']} / {r['updates']} | "
+                             f"{'**yes**' if r['diverged'] else 'no'} |")
+    if pngs:
+        lines += ["", "## Learning curves", ""]
+        lines += [f"![{Path(p).stem}]({Path(p).relative_to(out_dir)})" for p in pngs]
+    return "\n".join(lines) + "\n"
+
+
+def learning_curve(path: Path, title: str, by_plant: dict, tick_s: float) -> Path:
+    """Contour error (with the tuned PID's beside it) and weight norm against time, one column per plant."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(2, len(by_plant), figsize=(4.6 * len(by_plant), 6), squeeze=False, sharex="col")
+    for c, (plant, (cur, pid)) in enumerate(by_plant.items()):
+        t = np.arange(len(cur["contour_um"])) * tick_s
+        if pid is not None:
+            ax[0, c].plot(t, pid["contour_um"], color="0.6", lw=0.7, label="pid (tuned)")
+        ax[0, c].plot(t, cur["contour_um"], "r-", lw=0.7, label="neural")
+        ax[0, c].set(title=f"{plant} plant", ylabel="contour error µm")
+        ax[0, c].legend(fontsize=7)
+        ax[1, c].plot(t, cur["weight_norm"], "b-", lw=0.8)
+        ax[1, c].set(xlabel="s", ylabel="weight norm")
+    fig.suptitle(title, fontsize=10)
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(path.name + ".tmp.png")
+    fig.savefig(tmp, dpi=80)
+    plt.close(fig)
+    tmp.replace(path)
+    return path
