@@ -20,10 +20,11 @@ void nnik_ctl_reset(void);
  * [-NNIK_DUTY_MAX, NNIK_DUTY_MAX] out (sign: direction). */
 void nnik_ctl_tick(const int32_t ref[2], const int32_t pos[2], int16_t duty[2]);
 
-/* A learning controller's (its config header defines NNIK_CTL_LEARNS): the sum of every weight's
- * int32 master word modulo 2^16 after the last tick, the Python model's checksum(). The runtime
- * (nnik_servo.c) copies it into nnik_ctl_sum each tick for the co-simulation's check. */
-uint16_t nnik_ctl_checksum(void);
+/* The weights' checksum after the last tick (or reset): the sum of every weight's int32 master word
+ * modulo 2^16, the Python model's checksum(). A learning controller (nnik_ctl_nn_*.c) defines and
+ * sets it; the runtime (nnik_servo.c) defines it, 0, for the fixed-gain ones. The co-simulation's
+ * harness reads it after every tick. */
+extern uint16_t nnik_ctl_sum;
 
 #ifdef __cplusplus
 }

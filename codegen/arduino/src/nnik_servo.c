@@ -13,9 +13,11 @@
 volatile int32_t nnik_servo_count[2];
 volatile int32_t nnik_servo_pos[2];
 volatile int16_t nnik_servo_duty[2];
-/* the controller's weight checksum after the last tick (nnik_ctl.h: a learning controller's
- * nnik_ctl_checksum()); the fixed-gain controllers (pid, pdff, ccc) have no weights: it stays 0 */
-volatile uint16_t nnik_ctl_sum;
+#if !defined(NNIK_CTL_NN_AXES) && !defined(NNIK_CTL_NN_VECTOR)
+/* nnik_ctl.h's weight checksum: a learning controller defines and sets it; the fixed-gain ones
+ * (pid, pdff, ccc) have no weights, so it is defined here, for all of them, and stays 0 */
+uint16_t nnik_ctl_sum;
+#endif
 static uint8_t enc_prev;         /* PINC's four encoder bits at the last interrupt */
 static volatile uint16_t enc16[2]; /* the counts modulo 2^16: the interrupt's 16-bit work */
 static uint16_t enc16_seen[2];   /* enc16 when nnik_servo_count was last brought up to date */
@@ -108,8 +110,5 @@ ISR(TIMER1_COMPA_vect)
     nnik_servo_duty[0] = duty[0];
     nnik_servo_duty[1] = duty[1];
     PORTB &= (uint8_t)~_BV(PB5);
-#ifdef NNIK_CTL_LEARNS
-    nnik_ctl_sum = nnik_ctl_checksum(); /* after the busy pin: the check's work, not the controller's */
-#endif
 }
 #endif

@@ -35,8 +35,6 @@ extern volatile int32_t nnik_servo_count[2];
 /* The counts the last tick latched, and its duties (sign: direction). */
 extern volatile int32_t nnik_servo_pos[2];
 extern volatile int16_t nnik_servo_duty[2];
-/* The controller's weight checksum after the last tick (0 for a controller that does not learn). */
-extern volatile uint16_t nnik_ctl_sum;
 
 /* Set up the pins, the encoder interrupt, the PWM and the tick (counts start at x, y); the
  * caller enables interrupts. */

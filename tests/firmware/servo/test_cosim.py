@@ -18,14 +18,9 @@ from nnik.firmware.servo.build import tick_ocr1a
 from nnik.firmware.servo.cosim import run
 from nnik.implementations.servo import KINDS
 from tests.dynamics.servo.plants import configs
-from tests.firmware.servo.chip_fixtures import controller, firmware, references
+from tests.firmware.servo.chip_fixtures import controller, firmware, references, shipped_cfg
 
 TOP_COUNTS_S = 25_000  # plants up to 62.5 mm/s at 2.5 um/count: twice the DOMAIN class's free speed
-
-
-def shipped_cfg():
-    from nnik.machine.scenario import load_scenario
-    return load_scenario("datasets/xy_table.toml").servo
 
 
 @pytest.mark.parametrize("kind", KINDS)
