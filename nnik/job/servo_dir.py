@@ -18,12 +18,12 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from nnik.errors import NnikError
+from nnik.implementations.servo import KINDS  # noqa: F401 (the baselines, then the learning controllers)
 
 SCENARIO_FILE = "scenario.toml"
 SERVO_DIR = "servo"
 GAINS_FILE = "servo/gains.json"
 IDENTIFIED_FILE = "servo/identified.toml"
-KINDS = ("pid", "pdff", "ccc", "nn_axes", "nn_vector")  # the baselines, then the learning controllers
 
 
 def is_servo_dir(path: Path) -> bool:

@@ -23,8 +23,9 @@ void nnik_ctl_tick(const int32_t ref[2], const int32_t pos[2], int16_t duty[2]);
 /* The weights' checksum after the last tick (or reset): the sum of every weight's int32 master word
  * modulo 2^16, the Python model's checksum(). A learning controller (nnik_ctl_nn_*.c) defines and
  * sets it; the runtime (nnik_servo.c) defines it, 0, for the fixed-gain ones. The co-simulation's
- * harness reads it after every tick. */
-extern uint16_t nnik_ctl_sum;
+ * harness reads it after every tick (volatile: an exported sketch's link-time optimisation
+ * would drop a variable the firmware only writes). */
+extern volatile uint16_t nnik_ctl_sum;
 
 #ifdef __cplusplus
 }

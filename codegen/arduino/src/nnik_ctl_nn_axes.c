@@ -11,7 +11,7 @@
 
 #define NNIK_NNA_E_MAX (1L << 20)
 
-uint16_t nnik_ctl_sum; /* the weights' checksum after the last tick (or reset) */
+volatile uint16_t nnik_ctl_sum; /* the weights' checksum after the last tick (or reset) */
 
 static nnik_nn_t nnik_nna_net[2];
 static int32_t nnik_nna_e1[2], nnik_nna_e2[2];

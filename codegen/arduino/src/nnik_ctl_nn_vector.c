@@ -11,7 +11,7 @@
 #ifdef NNIK_CTL_NN_VECTOR
 #include "nnik_ctl_nn.h"
 
-uint16_t nnik_ctl_sum; /* the weights' checksum after the last tick (or reset) */
+volatile uint16_t nnik_ctl_sum; /* the weights' checksum after the last tick (or reset) */
 
 static nnik_nn_t nnik_nnv_net;
 static int32_t nnik_nnv_m1, nnik_nnv_m2;

@@ -16,7 +16,7 @@ volatile int16_t nnik_servo_duty[2];
 #if !defined(NNIK_CTL_NN_AXES) && !defined(NNIK_CTL_NN_VECTOR)
 /* nnik_ctl.h's weight checksum: a learning controller defines and sets it; the fixed-gain ones
  * (pid, pdff, ccc) have no weights, so it is defined here, for all of them, and stays 0 */
-uint16_t nnik_ctl_sum;
+volatile uint16_t nnik_ctl_sum;
 #endif
 static uint8_t enc_prev;         /* PINC's four encoder bits at the last interrupt */
 static volatile uint16_t enc16[2]; /* the counts modulo 2^16: the interrupt's 16-bit work */
