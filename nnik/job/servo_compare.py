@@ -31,23 +31,11 @@ from pathlib import Path
 import numpy as np
 
 from nnik.files.atomic_write import write_file_atomic
+from nnik.implementations.servo import BASELINES, NEURAL, make
 
 PLANTS = ("nominal", "drift", "differing")
-BASELINES = ("pid", "pdff", "ccc")
-NEURAL = ("nn_axes", "nn_vector")
 DIVERGED_CLAMP_SHARE = 0.01
 DIVERGED_PID_FACTOR = 10.0
-
-
-def make_controller(kind: str, gains: dict, cfg):
-    """The controller `kind` from its gains (a baseline) or its params (a neural one)."""
-    from nnik.implementations import servo
-
-    if kind in servo.KINDS:
-        return servo.make(kind, gains, cfg)
-    from nnik.implementations.servo import nn
-
-    return nn.make(kind, gains, cfg)
 
 
 def make_plant(name: str, cfg, ticks: int, start: tuple[int, int]):
@@ -68,7 +56,7 @@ def run_one(kind: str, gains: dict, cfg, ref, plant_name: str) -> tuple[dict, di
     from nnik.dynamics.servo.closed_loop import simulate
     from nnik.job.servo_measure import measure
 
-    ctl = make_controller(kind, gains, cfg)
+    ctl = make(kind, gains, cfg)
     counts = np.asarray(ref.counts)
     start = tuple(int(c) for c in counts[0])
     norms = np.zeros(len(counts))
@@ -96,9 +84,8 @@ def _diverged(r: dict, pid: dict | None) -> bool:
 
 
 def compare(scn, gains: dict, out_dir: Path, say=print, jobs=None, plants=PLANTS) -> dict:
-    """Run every controller in `gains` (kind -> gains or neural params) on every plant and job (default:
-    the shipped closed-loop tests, nnik.commands' TESTS order given by the caller, else every
-    datasets/jobs/servo_*.gcode and the reference job); write OUT/compare.md, compare.json and the
+    """Run every controller in `gains` (kind -> gains, or params for a neural one) on every plant and
+    job (paths; default: every datasets/jobs/servo_*.gcode and the reference job); write OUT/compare.md, compare.json and the
     learning curves. Returns {"results": job -> plant -> kind -> figures, "headline": [...],
     "markdown": path, "figures": [png paths]}."""
     from nnik.job.parse import JobRequest
