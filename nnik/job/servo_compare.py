@@ -14,8 +14,11 @@ weights) and the neural ones learn online throughout.
 Measures (nnik.job.servo_measure, on the carriage's true position): contour error max and RMS,
 the largest contour error near a reversal, the steady-state error (the largest over the job's
 steps), the share of saturated ticks; for the neural controllers the weight clamps and updates.
-A run is flagged `diverged` when its clamps pass 1 % of its updates, or when its largest contour
-error passes 10x the tuned PID's largest on the same job and plant.
+A neural controller's run is flagged `diverged` (issue 29 item 4) when its clamps pass 1 % of its
+updates ("clamps"), or when its largest contour error passes 10x the tuned PID's largest on the
+same job and plant, the PID's taken as at least one encoder count (a single-axis step's contour
+error is 0 for a PID that neither overshoots nor leaves the line) ("10x pid"). The baselines do
+not learn: no flag.
 
 Output: OUT/compare.md (one table per job: plant x controller, and the headline: who has the
 lowest RMS contour error per job and plant, and where a baseline beats both neural controllers),
@@ -31,23 +34,11 @@ from pathlib import Path
 import numpy as np
 
 from nnik.files.atomic_write import write_file_atomic
+from nnik.implementations.servo import BASELINES, NEURAL, make
 
 PLANTS = ("nominal", "drift", "differing")
-BASELINES = ("pid", "pdff", "ccc")
-NEURAL = ("nn_axes", "nn_vector")
 DIVERGED_CLAMP_SHARE = 0.01
 DIVERGED_PID_FACTOR = 10.0
-
-
-def make_controller(kind: str, gains: dict, cfg):
-    """The controller `kind` from its gains (a baseline) or its params (a neural one)."""
-    from nnik.implementations import servo
-
-    if kind in servo.KINDS:
-        return servo.make(kind, gains, cfg)
-    from nnik.implementations.servo import nn
-
-    return nn.make(kind, gains, cfg)
 
 
 def make_plant(name: str, cfg, ticks: int, start: tuple[int, int]):
@@ -68,7 +59,7 @@ def run_one(kind: str, gains: dict, cfg, ref, plant_name: str) -> tuple[dict, di
     from nnik.dynamics.servo.closed_loop import simulate
     from nnik.job.servo_measure import measure
 
-    ctl = make_controller(kind, gains, cfg)
+    ctl = make(kind, gains, cfg)
     counts = np.asarray(ref.counts)
     start = tuple(int(c) for c in counts[0])
     norms = np.zeros(len(counts))
@@ -90,17 +81,21 @@ def run_one(kind: str, gains: dict, cfg, ref, plant_name: str) -> tuple[dict, di
     return out, {"contour_um": contour, "weight_norm": norms if norm else None}
 
 
-def _diverged(r: dict, pid: dict | None) -> bool:
-    return bool(r["clamp_share"] > DIVERGED_CLAMP_SHARE
-                or (pid is not None and r["contour_max_um"] > DIVERGED_PID_FACTOR * pid["contour_max_um"]))
+def diverged(r: dict, pid: dict | None, um_per_count: float) -> str | None:
+    """Why a neural run is flagged diverged ("clamps", "10x pid"), or None."""
+    if r["clamp_share"] > DIVERGED_CLAMP_SHARE:
+        return "clamps"
+    if pid is not None and r["contour_max_um"] > DIVERGED_PID_FACTOR * max(pid["contour_max_um"], um_per_count):
+        return "10x pid"
+    return None
 
 
-def compare(scn, gains: dict, out_dir: Path, say=print, jobs=None, plants=PLANTS) -> dict:
-    """Run every controller in `gains` (kind -> gains or neural params) on every plant and job (default:
-    the shipped closed-loop tests, nnik.commands' TESTS order given by the caller, else every
-    datasets/jobs/servo_*.gcode and the reference job); write OUT/compare.md, compare.json and the
-    learning curves. Returns {"results": job -> plant -> kind -> figures, "headline": [...],
-    "markdown": path, "figures": [png paths]}."""
+def compare(scn, gains: dict, out_dir: Path, say=print, jobs=None, plants=PLANTS, preamble=()) -> dict:
+    """Run every controller in `gains` (kind -> gains, or params for a neural one) on every plant and
+    job (paths; default: every datasets/jobs/servo_*.gcode and the reference job); write
+    OUT/compare.md (`preamble`: markdown lines before its tables), compare.json and the learning
+    curves. Returns {"results": job -> plant -> kind -> figures, "headline": [...], "markdown":
+    path, "figures": [png paths]}."""
     from nnik.job.parse import JobRequest
     from nnik.job.reference import job_reference
 
@@ -119,7 +114,8 @@ def compare(scn, gains: dict, out_dir: Path, say=print, jobs=None, plants=PLANTS
             for kind in kinds:
                 row[kind], curves[kind] = run_one(kind, gains[kind], cfg, ref, plant)
             for kind in kinds:
-                row[kind]["diverged"] = _diverged(row[kind], row.get("pid"))
+                pid = row.get("pid")
+                row[kind]["diverged"] = diverged(row[kind], pid, cfg.um_per_count) if kind in NEURAL else None
                 if curves[kind]["weight_norm"] is not None:
                     learning.setdefault(kind, {})[plant] = (curves[kind], curves.get("pid"))
             results[name][plant] = row
@@ -130,7 +126,7 @@ def compare(scn, gains: dict, out_dir: Path, say=print, jobs=None, plants=PLANTS
                                        f"{kind} on {name}: learning online", by_plant, ref.tick_s))
     headline = headlines(results)
     md = out_dir / "compare.md"
-    write_file_atomic(md, markdown(results, headline, pngs, out_dir))
+    write_file_atomic(md, markdown(results, headline, pngs, out_dir, preamble))
     write_file_atomic(out_dir / "compare.json", json.dumps({"results": results, "headline": headline}, indent=2) + "\n")
     return {"results": results, "headline": headline, "markdown": str(md), "figures": [str(p) for p in pngs]}
 
@@ -165,11 +161,16 @@ def _f(v, nd=1) -> str:
     return "–" if v is None else f"{v:.{nd}f}"
 
 
-def markdown(results: dict, headline: list[dict], pngs: list[Path], out_dir: Path) -> str:
+def _flag(kind: str, why: str | None) -> str:
+    return "–" if kind not in NEURAL else f"**yes** ({why})" if why else "no"
+
+
+def markdown(results: dict, headline: list[dict], pngs: list[Path], out_dir: Path, preamble=()) -> str:
     lines = ["# Neural controllers against the tuned baselines", "",
              "Python integer models against the plant; contour errors in µm on the carriage's true position. "
-             "`diverged`: clamps over 1 % of updates, or a largest contour error over 10x the tuned PID's on the "
-             "same job and plant.", "", "## Headline (lowest RMS contour error)", "",
+             "`diverged` (neural controllers): clamps over 1 % of updates, or a largest contour error over 10x the "
+             "tuned PID's (at least one count) on the same job and plant.", "",
+             *(list(preamble) + [""] if preamble else []), "## Headline (lowest RMS contour error)", "",
              "| job | plant | best | best baseline | best neural | a baseline wins |", "|---|---|---|---|---|---|"]
     for h in headline:
         lines.append(f"| {h['job']} | {h['plant']} | {h['best']} ({_f(h['best_rms_um'])}) | "
@@ -185,7 +186,7 @@ def markdown(results: dict, headline: list[dict], pngs: list[Path], out_dir: Pat
                 lines.append(f"| {plant} | {kind} | {_f(r['contour_max_um'])} | {_f(r['contour_rms_um'])} | "
                              f"{_f(r['reversal_max_um'])} | {_f(r['steady_state_um'])} | "
                              f"{100 * r['saturated_fraction']:.1f} | {r['clamps']} / {r['updates']} | "
-                             f"{'**yes**' if r['diverged'] else 'no'} |")
+                             f"{_flag(kind, r['diverged'])} |")
     if pngs:
         lines += ["", "## Learning curves", ""]
         lines += [f"![{Path(p).stem}]({Path(p).relative_to(out_dir)})" for p in pngs]
