@@ -4,8 +4,10 @@ machine before it ships (the identified speed models with their Coulomb friction
 nnik.implementations.servo.model_loop.simulate_model), not the scenario's true plant, which a real
 rig does not give. Every controller is scored the same way: its integer model from a reset (a
 neural one from its pretrained weights, learning as it runs) on the reference job; the contour
-error is the job measure's (nnik.job.servo_measure.path_distance: the carriage to the reference
-path, um).
+error is the one tuning minimises (nnik.implementations.servo.measure.score_run: the carriage's
+distance to the reference path's pieces within +-0.5 s of each tick, um). Not the distance to the
+whole path (nnik.job.servo_measure, the report's tables): a carriage that never moves sits on the
+path's start and would score 0 there.
 
 A neural controller whose run diverged there (weight clamps over 1 % of its updates,
 nnik.job.servo_loop.learning_figures) is never the default. Ties go to the earlier kind in KINDS
@@ -14,22 +16,20 @@ nnik.job.servo_loop.learning_figures) is never the default. Ties go to the earli
 
 from __future__ import annotations
 
-import numpy as np
-
 
 def identified_scores(cfg, models, coulomb_v, controllers: dict, ref) -> dict[str, dict]:
     """kind -> {"rms_um", "max_um", "diverged"} of each controller on ref (a nnik.job.reference
     Reference) closed loop around the identified models."""
+    from nnik.implementations.servo.measure import score_run
     from nnik.implementations.servo.model_loop import simulate_model
     from nnik.job.servo_loop import learning_figures
-    from nnik.job.servo_measure import path_distance
 
     out = {}
     for kind, ctl in controllers.items():
-        pos, _ = simulate_model(cfg, models, ctl, ref.counts, coulomb_v)
-        contour = path_distance(pos * cfg.um_per_count, ref.um)
+        pos, duty = simulate_model(cfg, models, ctl, ref.counts, coulomb_v)
+        s = score_run(cfg, ref.counts, pos, duty)
         learning = learning_figures(ctl)
-        out[kind] = {"rms_um": float(np.sqrt(np.mean(contour * contour))), "max_um": float(contour.max()),
+        out[kind] = {"rms_um": s["rms_contour_um"], "max_um": s["max_contour_um"],
                      "diverged": bool(learning and learning["diverged"])}
     return out
 

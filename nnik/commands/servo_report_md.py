@@ -59,9 +59,10 @@ def _pretraining(logs: dict) -> list[str]:
     lines = ["", "Pretrained on the identified models (the seed's steps and the reference job, the same integer "
              "controller learning online, the weights carried from episode to episode; log: `servo/pretrain.json`):", ""]
     for k, lg in logs.items():
-        state = (f"below 2 % of the reference after {lg['episodes']} episodes" if lg["passed"] else
+        state = (f"below 2 % of the reference after {lg['episodes']} episode{'s' * (lg['episodes'] != 1)}" if lg["passed"] else
                  f"**not** below 2 % of the reference within {lg['episode_budget']} episodes")
-        lines.append(f"- {k}: {state}; from power-on, worst error / (2 % of the reference) {lg['verify_worst']:.2f}; "
+        lines.append(f"- {k}: {state} (eta_shift {lg['eta_shift']}, in_shift {lg['in_shift']}); from power-on, worst "
+                     f"error / (2 % of the reference) {lg['verify_worst']:.2f}; "
                      f"impulse Jacobian X {lg['jacobian'][0]:.4f}, Y {lg['jacobian'][1]:.4f} (the seed's rig: "
                      f"X 1.0103, Y 0.6047)")
     return lines

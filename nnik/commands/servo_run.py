@@ -5,8 +5,8 @@ neural controllers, run the seed's tests closed loop, compare, write the report.
    the scenario's plant, its log -> identify (nnik.dynamics.servo.fit: K and tau per axis);
 2. tune pid, pdff and ccc against the identified models (nnik.implementations.servo.tune) on the
    reference job (datasets/jobs/xy_table_reference.gcode), the same trials and seed for each;
-3. pretrain nn_axes and nn_vector on the identified models (nnik.implementations.servo.nn.pretrain)
-   on the seed's steps (the shipped step tests) and the reference job, from the [controller] seed;
+3. pretrain nn_axes and nn_vector on the identified models (nnik.job.servo_pretrain) on the seed's
+   steps (the shipped step tests) and the reference job, from the [controller] seed;
 4. the default controller (nnik.commands.servo_default): the lowest RMS contour error on the
    reference job on the IDENTIFIED plant (what a real rig gives), named with why;
 5. every shipped test (TESTS) closed loop with each of the 5 controllers on the scenario's (true)
@@ -34,7 +34,6 @@ REFERENCE_JOB = "xy_table_reference.gcode"
 TESTS = ("servo_step_x25.gcode", "servo_step_y20.gcode", "servo_step_sequence.gcode", "servo_circle.gcode",
          REFERENCE_JOB)
 EXCITE_S = 20.0
-PRETRAIN_STEPS = ("servo_step_x25.gcode", "servo_step_y20.gcode")  # the seed's steps
 PRETRAIN_FILE = "servo/pretrain.json"
 
 
@@ -87,7 +86,7 @@ def run_servo(scn, out: Path, say=print, use_chip: bool | None = None) -> dict:
                            limits["max_saturated_fraction"], coulomb)
         say(f"tuned {kind} on {REFERENCE_JOB} against the identified model ({trials} trials): "
             + ", ".join(f"{k} {v:.4g}" for k, v in gains[kind].items()))
-    pretrained = _pretrain(scn, models, coulomb, ref, seed, say)
+    pretrained = _pretrain(scn, models, coulomb, seed, say)
     gains.update({k: p for k, (p, _) in pretrained.items()})
     scores = identified_scores(scn.servo, models, coulomb, {k: make(k, gains[k], scn.servo) for k in KINDS}, ref)
     best, why = choose(ctl["kind"], scores, REFERENCE_JOB)
@@ -100,7 +99,7 @@ def run_servo(scn, out: Path, say=print, use_chip: bool | None = None) -> dict:
         results[job] = {k: ClosedLoopJob(k, False, tag=k).run(model, req) for k in KINDS}
     (out / PRETRAIN_FILE).write_text(json.dumps({k: lg for k, (_, lg) in pretrained.items()}, indent=1) + "\n")
     data = {"chosen": best, "gains": gains, "reference_job": REFERENCE_JOB, "trials": trials, "seed": seed,
-            "default": {"why": why, "identified_plant": scores}}
+            "default": {"why": why, "identified_plant": scores, "coulomb_v": list(coulomb)}}
     (out / GAINS_FILE).write_text(json.dumps(data, indent=2) + "\n")  # last: a model dir only once it is whole
     from nnik.implementations.servo.emit_c import write_controller_c
 
@@ -117,26 +116,16 @@ def run_servo(scn, out: Path, say=print, use_chip: bool | None = None) -> dict:
     return {"chosen": best, "results": results, "chip": chip, "seconds": time.perf_counter() - t0}
 
 
-def _pretrain(scn, models, coulomb, ref, seed: int, say) -> dict:
-    """kind -> (params, log) of each neural controller, pretrained on the identified models on the
-    seed's steps (the shipped step tests) and the reference job."""
-    from nnik.implementations.servo.nn.pretrain import pretrain
-    from nnik.job.parse import JobRequest
-    from nnik.job.reference import job_reference
+def _pretrain(scn, models, coulomb, seed: int, say) -> dict:
+    """kind -> (params, log) of each neural controller (nnik.job.servo_pretrain: the seed's steps and
+    the reference job on the identified models), and the impulse Jacobians beside the seed's."""
+    from nnik.job.servo_pretrain import pretrain_all
 
-    tests = [(job, job_reference(JobRequest(JOBS / job, scn))[1].counts) for job in PRETRAIN_STEPS]
-    tests.append((REFERENCE_JOB, ref.counts))
-    out = {}
-    for kind in NEURAL:
-        params, log = pretrain(kind, scn.servo, models, coulomb, seed, tests=tests)
-        out[kind] = params, log
-        state = (f"below 2 % of the reference after {log['episodes']} episodes" if log["passed"] else
-                 f"NOT below 2 % of the reference within {log['episode_budget']} episodes")
-        say(f"pretrained {kind} on the identified model ({', '.join(n for n, _ in tests)}): {state} (worst "
-            f"error / 2 % of the reference {log['verify_worst']:.2f} from power-on); eta_shift {log['eta_shift']}, "
-            f"in_shift {log['in_shift']}; impulse Jacobian X {log['jacobian'][0]:.4f}, Y {log['jacobian'][1]:.4f} "
-            f"(the seed's rig: X 1.0103, Y 0.6047)")
-    return out
+    params, logs = pretrain_all(scn, models, coulomb, seed, say=say)
+    jac = next(iter(logs.values()))["jacobian"]
+    say(f"impulse Jacobians on the identified model (12 V, 40 mm): X {jac[0]:.4f}, Y {jac[1]:.4f} (the seed's rig: "
+        "X 1.0103, Y 0.6047)")
+    return {k: (params[k], logs[k]) for k in params}
 
 
 def _chip(out: Path, scn, model, use_chip: bool | None, say) -> dict:
