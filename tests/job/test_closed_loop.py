@@ -150,3 +150,28 @@ def test_nnik_export_writes_the_servo_library_with_the_stored_circle(xy_run, tmp
     r = nnik("export", out, "--arduino", tmp_path / "lib3", "--job", long_job)
     assert r.returncode == 2 and r.stderr.count("\n") == 1 and "do not fit" in r.stderr, r.stderr
     assert not (tmp_path / "lib3").exists()
+
+
+@pytest.mark.parametrize("kind", ("nn_axes", "nn_vector"))
+def test_nnik_export_a_neural_controller_builds_with_arduino_mk(xy_run, tmp_path, kind):
+    """`nnik export OUTDIR --arduino DIR --controller nn_*`: the library runs the controller from its
+    pretrained weights (the run's params in its config header) and the seed's circle fits the Uno."""
+    import shutil
+
+    from nnik.targets.avr import elf_sizes
+
+    out, _ = xy_run
+    r = nnik("export", out, "--arduino", tmp_path / "lib", "--controller", kind)
+    assert r.returncode == 0 and f"example xy_table_servo: {kind}, job servo_circle.gcode" in r.stdout, r.stderr
+    w1 = json.loads((out / "servo" / "gains.json").read_text())["gains"][kind]["w1"]
+    config = (tmp_path / "lib" / "src" / "nnik_servo_config.h").read_text()
+    assert f"NNIK_CTL_{kind.upper()} 1" in config and f"{w1[0][0][0]}L" in config
+    if not Path("/usr/share/arduino/Arduino.mk").is_file() or shutil.which("make") is None:
+        if os.environ.get("NNIK_REQUIRE_TOOLCHAINS") == "1":
+            pytest.fail("arduino-mk not installed")
+        pytest.skip("arduino-mk not installed")
+    ex = tmp_path / "lib" / "examples" / "xy_table_servo"
+    b = subprocess.run(["make", "-s"], cwd=ex, capture_output=True, text=True, timeout=600)
+    assert b.returncode == 0, b.stderr[-800:]
+    size = elf_sizes(next((ex / "build-uno").glob("*.elf")), tmp_path)
+    assert size["flash"] <= 32 * 1024 - 512 and size["ram"] <= 2048
