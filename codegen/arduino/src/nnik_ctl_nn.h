@@ -12,6 +12,7 @@
  *   w2_j += rnd(rnd(d, ETA & 7) h_j, 8 (ETA >> 3));  w1_ji += rnd(rnd(dh_j, S & 7) x_i, 8 (S >> 3)), S = ETA + 3
  *   (rnd(v, s) = (v + 2^s / 2) >> s): the learning rate's bits on the int16 delta, its whole bytes on
  *   the product (byte moves on the AVR); each master word clamped (+-2^29, +-2^30)
+ *   the rows of half the hidden units per tick when NNIK_NN_W1_EVERY is 2 (alternating by the tick's parity)
  *   skipped when the previous output sat at +-NNIK_DUTY_MAX and d pushes it further (anti-windup)
  * Every product is int16 x int16 -> int32.  nnik_ctl_sum: the master words' low halves summed mod 2^16
  * (kept up to date by each update's change).
@@ -149,6 +150,144 @@ NNIK_NN_INLINE int32_t nnik_nn_update(int32_t w, int16_t a, int16_t b, uint8_t s
     return nnik_nn_clamp(w + nnik_nn_asr(nnik_nn_mac(NNIK_NN_HALF(s), a, b), s & ~7), lim);
 }
 
+/* sum_i (w[i] >> 16) x[i] over one hidden unit's 4 first-layer master words (the forward pass'
+ * hidden sum), and *sum += their low halves (the checksum).  On the AVR one inline block: the top
+ * halves read in place, AVR201's multiply-accumulate.  Elsewhere plain C.  The same values. */
+#if defined(__GNUC__) && defined(__AVR__)
+NNIK_NN_INLINE int32_t nnik_nn_dot(const int32_t *wp, const int16_t *xp, uint16_t *sum)
+{
+    int32_t acc;
+    int16_t w, x;
+    uint16_t s = *sum;
+    uint8_t z, t;
+    __asm__("clr %[z]\n\t"
+            "clr %A[acc]\n\t"
+            "clr %B[acc]\n\t"
+            "clr %C[acc]\n\t"
+            "clr %D[acc]\n\t"
+            "ldd %A[w], Z+2\n\t"
+            "ldd %B[w], Z+3\n\t"
+            "ld %A[x], X+\n\t"
+            "ld %B[x], X+\n\t"
+            "ldd %[t], Z+0\n\t"
+            "add %A[s], %[t]\n\t"
+            "ldd %[t], Z+1\n\t"
+            "adc %B[s], %[t]\n\t"
+            "muls %B[w], %B[x]\n\t"
+            "add %C[acc], r0\n\t"
+            "adc %D[acc], r1\n\t"
+            "mul %A[w], %A[x]\n\t"
+            "add %A[acc], r0\n\t"
+            "adc %B[acc], r1\n\t"
+            "adc %C[acc], %[z]\n\t"
+            "adc %D[acc], %[z]\n\t"
+            "mulsu %B[w], %A[x]\n\t"
+            "sbc %D[acc], %[z]\n\t"
+            "add %B[acc], r0\n\t"
+            "adc %C[acc], r1\n\t"
+            "adc %D[acc], %[z]\n\t"
+            "mulsu %B[x], %A[w]\n\t"
+            "sbc %D[acc], %[z]\n\t"
+            "add %B[acc], r0\n\t"
+            "adc %C[acc], r1\n\t"
+            "adc %D[acc], %[z]\n\t"
+            "ldd %A[w], Z+6\n\t"
+            "ldd %B[w], Z+7\n\t"
+            "ld %A[x], X+\n\t"
+            "ld %B[x], X+\n\t"
+            "ldd %[t], Z+4\n\t"
+            "add %A[s], %[t]\n\t"
+            "ldd %[t], Z+5\n\t"
+            "adc %B[s], %[t]\n\t"
+            "muls %B[w], %B[x]\n\t"
+            "add %C[acc], r0\n\t"
+            "adc %D[acc], r1\n\t"
+            "mul %A[w], %A[x]\n\t"
+            "add %A[acc], r0\n\t"
+            "adc %B[acc], r1\n\t"
+            "adc %C[acc], %[z]\n\t"
+            "adc %D[acc], %[z]\n\t"
+            "mulsu %B[w], %A[x]\n\t"
+            "sbc %D[acc], %[z]\n\t"
+            "add %B[acc], r0\n\t"
+            "adc %C[acc], r1\n\t"
+            "adc %D[acc], %[z]\n\t"
+            "mulsu %B[x], %A[w]\n\t"
+            "sbc %D[acc], %[z]\n\t"
+            "add %B[acc], r0\n\t"
+            "adc %C[acc], r1\n\t"
+            "adc %D[acc], %[z]\n\t"
+            "ldd %A[w], Z+10\n\t"
+            "ldd %B[w], Z+11\n\t"
+            "ld %A[x], X+\n\t"
+            "ld %B[x], X+\n\t"
+            "ldd %[t], Z+8\n\t"
+            "add %A[s], %[t]\n\t"
+            "ldd %[t], Z+9\n\t"
+            "adc %B[s], %[t]\n\t"
+            "muls %B[w], %B[x]\n\t"
+            "add %C[acc], r0\n\t"
+            "adc %D[acc], r1\n\t"
+            "mul %A[w], %A[x]\n\t"
+            "add %A[acc], r0\n\t"
+            "adc %B[acc], r1\n\t"
+            "adc %C[acc], %[z]\n\t"
+            "adc %D[acc], %[z]\n\t"
+            "mulsu %B[w], %A[x]\n\t"
+            "sbc %D[acc], %[z]\n\t"
+            "add %B[acc], r0\n\t"
+            "adc %C[acc], r1\n\t"
+            "adc %D[acc], %[z]\n\t"
+            "mulsu %B[x], %A[w]\n\t"
+            "sbc %D[acc], %[z]\n\t"
+            "add %B[acc], r0\n\t"
+            "adc %C[acc], r1\n\t"
+            "adc %D[acc], %[z]\n\t"
+            "ldd %A[w], Z+14\n\t"
+            "ldd %B[w], Z+15\n\t"
+            "ld %A[x], X+\n\t"
+            "ld %B[x], X+\n\t"
+            "ldd %[t], Z+12\n\t"
+            "add %A[s], %[t]\n\t"
+            "ldd %[t], Z+13\n\t"
+            "adc %B[s], %[t]\n\t"
+            "muls %B[w], %B[x]\n\t"
+            "add %C[acc], r0\n\t"
+            "adc %D[acc], r1\n\t"
+            "mul %A[w], %A[x]\n\t"
+            "add %A[acc], r0\n\t"
+            "adc %B[acc], r1\n\t"
+            "adc %C[acc], %[z]\n\t"
+            "adc %D[acc], %[z]\n\t"
+            "mulsu %B[w], %A[x]\n\t"
+            "sbc %D[acc], %[z]\n\t"
+            "add %B[acc], r0\n\t"
+            "adc %C[acc], r1\n\t"
+            "adc %D[acc], %[z]\n\t"
+            "mulsu %B[x], %A[w]\n\t"
+            "sbc %D[acc], %[z]\n\t"
+            "add %B[acc], r0\n\t"
+            "adc %C[acc], r1\n\t"
+            "adc %D[acc], %[z]\n\t"
+            "clr __zero_reg__"
+            : [acc] "=&r"(acc), [w] "=&a"(w), [x] "=&a"(x), [z] "=&r"(z), [t] "=&r"(t), [s] "+r"(s), "+x"(xp)
+            : "z"(wp));
+    *sum = s;
+    return acc;
+}
+#else
+NNIK_NN_INLINE int32_t nnik_nn_dot(const int32_t *wp, const int16_t *xp, uint16_t *sum)
+{
+    int32_t acc = 0;
+    uint8_t i;
+    for (i = 0; i < NNIK_NN_IN; i++) {
+        acc += (int32_t)(int16_t)(wp[i] >> 16) * xp[i];
+        *sum = (uint16_t)(*sum + (uint16_t)wp[i]);
+    }
+    return acc;
+}
+#endif
+
 /* One hidden unit's row of first-layer updates: w[i] += rnd(a x[i], 8 Q1) for the 4 inputs (Q1 =
  * NNIK_NN_S1 >> 3 whole bytes; rnd adds the top bit of the bytes dropped), then the exact clamp
  * where a new word may have left +-2^30.  On the AVR one inline block per word: the product by
@@ -233,14 +372,15 @@ static uint16_t nnik_nn_load(nnik_nn_t *n, uint8_t k)
     return sum;
 }
 
-/* One tick of one net, learning and forward fused per hidden unit: when the net is primed (a cached
- * forward pass) and the anti-windup allows, hidden unit j's weights learn from the cache (inputs
- * n->x, output n->h[j]) and delta_out d; then a_j and h_j from the new inputs x and the updated row.
+/* One tick of one net: when the net is primed (a cached forward pass) and the anti-windup allows,
+ * the weights learn from the cache (inputs n->x, outputs n->h) and delta_out d: every output weight,
+ * and the first-layer rows of the units j with ((j ^ phase) & (NNIK_NN_W1_EVERY - 1)) == 0; then
+ * the forward pass with the new inputs x.
  * Returns the Q8 duty accumulator; *sum follows the master words' low halves. */
 #if defined(__GNUC__)
 __attribute__((noinline))
 #endif
-static int32_t nnik_nn_step(nnik_nn_t *n, const int16_t x[NNIK_NN_IN], int16_t d, uint16_t *sum)
+static int32_t nnik_nn_step(nnik_nn_t *n, const int16_t x[NNIK_NN_IN], int16_t d, uint8_t phase, uint16_t *sum)
 {
     uint8_t j, i;
     int32_t y = 0;
@@ -249,27 +389,22 @@ static int32_t nnik_nn_step(nnik_nn_t *n, const int16_t x[NNIK_NN_IN], int16_t d
     if (n->primed && !((n->u >= NNIK_DUTY_MAX && d > 0) || (n->u <= -NNIK_DUTY_MAX && d < 0))) {
         int16_t d2 = nnik_nn_rnd16(d, NNIK_NN_S2 & 7);
         w = &n->w1[0][0];
-        for (j = 0; j < NNIK_NN_HID; j++) {
+        for (j = 0; j < NNIK_NN_HID; j++, w += NNIK_NN_IN) {
             int16_t h = n->h[j];
             int32_t w2 = n->w2[j];
-            int16_t g = (int16_t)(32767 - nnik_nn_shr15(nnik_nn_mac(0, h, h)));
-            int16_t t = nnik_ctl_s16(nnik_nn_asr(nnik_nn_mac(0, d, (int16_t)(w2 >> 16)), 12));
-            int16_t dh = nnik_nn_rnd16(nnik_nn_shr15(nnik_nn_mac(0, t, g)), NNIK_NN_S1 & 7);
             n->w2[j] = nnik_nn_update(w2, d2, h, NNIK_NN_S2, NNIK_NN_W2_LIM);
-            nnik_nn_row(w, dh, n->x);
-            w += NNIK_NN_IN;
+            if (((j ^ phase) & (NNIK_NN_W1_EVERY - 1)) == 0) {
+                int16_t g = (int16_t)(32767 - nnik_nn_shr15(nnik_nn_mac(0, h, h)));
+                int16_t t = nnik_ctl_s16(nnik_nn_asr(nnik_nn_mac(0, d, (int16_t)(w2 >> 16)), 12));
+                int16_t dh = nnik_nn_rnd16(nnik_nn_shr15(nnik_nn_mac(0, t, g)), NNIK_NN_S1 & 7);
+                nnik_nn_row(w, dh, n->x);
+            }
         }
     }
     w = &n->w1[0][0];
-    for (j = 0; j < NNIK_NN_HID; j++) {
-        int32_t a = 0;
-        const int16_t *xi = x;
-        int16_t h;
-        for (i = 0; i < NNIK_NN_IN; i++, w++) {
-            a = nnik_nn_mac(a, (int16_t)(*w >> 16), *xi++);
-            s += (uint16_t)*w;
-        }
-        h = nnik_tanh(nnik_ctl_s16(nnik_nn_asr(a, 12)));
+    for (j = 0; j < NNIK_NN_HID; j++, w += NNIK_NN_IN) {
+        int32_t a = nnik_nn_dot(w, x, &s);
+        int16_t h = nnik_tanh(nnik_ctl_s16(nnik_nn_asr(a, 12)));
         n->h[j] = h;
         y = nnik_nn_mac(y, (int16_t)(n->w2[j] >> 16), h);
         s += (uint16_t)n->w2[j];

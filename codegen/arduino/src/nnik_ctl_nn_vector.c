@@ -15,12 +15,13 @@ uint16_t nnik_ctl_sum; /* the weights' checksum after the last tick (or reset) *
 
 static nnik_nn_t nnik_nnv_net;
 static int32_t nnik_nnv_m1, nnik_nnv_m2;
-static uint8_t nnik_nnv_primed, nnik_nnv_loaded;
+static uint8_t nnik_nnv_primed, nnik_nnv_loaded, nnik_nnv_phase;
 
 void nnik_ctl_reset(void)
 {
     nnik_ctl_sum = nnik_nn_load(&nnik_nnv_net, 0);
     nnik_nnv_primed = 0;
+    nnik_nnv_phase = 0;
     nnik_nnv_loaded = 1;
 }
 
@@ -49,8 +50,9 @@ void nnik_ctl_tick(const int32_t ref[2], const int32_t pos[2], int16_t duty[2])
     nnik_nnv_m2 = m1;
     nnik_nnv_m1 = m;
     nnik_ctl_sum = 0;
-    nnik_nnv_net.u = nnik_ctl_duty(nnik_nn_step(&nnik_nnv_net, x, x[0], &nnik_ctl_sum));
+    nnik_nnv_net.u = nnik_ctl_duty(nnik_nn_step(&nnik_nnv_net, x, x[0], nnik_nnv_phase, &nnik_ctl_sum));
     nnik_nnv_primed = 1;
+    nnik_nnv_phase ^= 1;
     if (m == 0) {
         duty[0] = 0;
         duty[1] = 0;
