@@ -60,8 +60,9 @@ class NnVector(NeuralController):
         x = self._inputs((m, m - m1, m - 2 * m1 + m2, isqrt(rx * rx + ry * ry)))
         self.m2, self.m1 = m1, m
         net = self.nets[0]
-        net.learn(x[0], self.p["eta_shift"], self.duty_max, self.counts)
+        self._learn(net, x[0])
         net.u = u = fx.duty_out(net.forward(x, self.out_shift), self.duty_max)
+        self.phase ^= 1
         if m == 0:
             return 0, 0
         inv = (1 << 30) // m

@@ -11,6 +11,10 @@ truth: no float is stored. Keys:
     "win"       (optional, default 4) nn_axes: the reference speed's window in ticks (1, 2, 4, 8)
     "r_shift"   (optional, default 3) nn_vector: |R| is taken of the reference >> r_shift (each
                 component saturated to int16 first)
+    "w1_every"  (optional, default 2) 1 or 2: a hidden unit's first-layer row learns every tick (1,
+                the seed's schedule) or every second tick (2: the even units on even ticks since the
+                reset, the odd on odd ones; the output layer learns every tick either way). 2 halves
+                the hidden layer's learning cost, so the worst tick fits the chip's cycle budget.
 
 initial_params(kind, cfg, seed, jacobian) makes a seeded random start for pretraining.
 """
@@ -26,7 +30,7 @@ from nnik.implementations.servo.nn import formats as f
 from nnik.implementations.servo.window import WINDOWS
 
 NETS = {"nn_axes": 2, "nn_vector": 1}
-OPTIONAL = {"nn_axes": {"win": 4}, "nn_vector": {"r_shift": 3}}
+OPTIONAL = {"nn_axes": {"win": 4, "w1_every": 2}, "nn_vector": {"r_shift": 3, "w1_every": 2}}
 REQUIRED = ("w1", "w2", "eta_shift", "jacobian", "in_shift")
 
 
@@ -61,6 +65,9 @@ def check_params(kind: str, params) -> dict:
     out["eta_shift"] = f.check_int("eta_shift", p["eta_shift"], 0, f.ETA_MAX)
     out["jacobian"] = _int_list(kind, "jacobian", p["jacobian"], 2, -f.I16, f.I16)
     out["in_shift"] = _int_list(kind, "in_shift", p["in_shift"], f.N_IN, -f.IN_SHIFT_MAX, f.IN_SHIFT_MAX)
+    if p["w1_every"] not in (1, 2):
+        raise NnikError(f"{kind} params: w1_every must be 1 or 2 ticks, not {p['w1_every']!r}")
+    out["w1_every"] = int(p["w1_every"])
     if kind == "nn_axes":
         if p["win"] not in WINDOWS:
             raise NnikError(f"nn_axes params: win must be one of {', '.join(map(str, WINDOWS))} ticks, not {p['win']!r}")
