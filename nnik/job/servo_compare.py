@@ -90,11 +90,11 @@ def diverged(r: dict, pid: dict | None, um_per_count: float) -> str | None:
     return None
 
 
-def compare(scn, gains: dict, out_dir: Path, say=print, jobs=None, plants=PLANTS, preamble=()) -> dict:
+def compare(scn, gains: dict, models, out_dir: Path, say=print, jobs=None, plants=PLANTS, preamble=()) -> dict:
     """Run every controller in `gains` (kind -> gains, or params for a neural one) on every plant and
     job (paths; default: every datasets/jobs/servo_*.gcode and the reference job); write
-    OUT/compare.md (`preamble`: markdown lines before its tables), compare.json and the learning
-    curves. Returns {"results": job -> plant -> kind -> figures, "headline": [...], "markdown":
+    OUT/compare.md (the identified `models`' impulse Jacobians beside the seed's when given, then
+    `preamble`: markdown lines before its tables), compare.json and the learning curves. Returns {"results": job -> plant -> kind -> figures, "headline": [...], "markdown":
     path, "figures": [png paths]}."""
     from nnik.job.parse import JobRequest
     from nnik.job.reference import job_reference
@@ -126,9 +126,22 @@ def compare(scn, gains: dict, out_dir: Path, say=print, jobs=None, plants=PLANTS
                                        f"{kind} on {name}: learning online", by_plant, ref.tick_s))
     headline = headlines(results)
     md = out_dir / "compare.md"
-    write_file_atomic(md, markdown(results, headline, pngs, out_dir, preamble))
+    pre = (jacobian_lines(models, cfg) + [""] if models is not None else []) + [x for p in preamble for x in (p, "")]
+    write_file_atomic(md, markdown(results, headline, pngs, out_dir, pre))
     write_file_atomic(out_dir / "compare.json", json.dumps({"results": results, "headline": headline}, indent=2) + "\n")
     return {"results": results, "headline": headline, "markdown": str(md), "figures": [str(p) for p in pngs]}
+
+
+def jacobian_lines(models, cfg) -> list[str]:
+    """The identified models' impulse Jacobians beside the seed's (its rig), as a markdown table."""
+    from nnik.implementations.servo.nn.jacobian import SEED_JACOBIANS, impulse_jacobian
+
+    lines = ["Plant Jacobians by the seed's impulse method (normalised to 12 V and 40 mm, per volt-second; "
+             "nnik.implementations.servo.nn.jacobian):", "", "| axis | identified K counts/s/V | ours 1/s | seed's rig |",
+             "|---|---|---|---|"]
+    for axis, m, seed in zip("XY", models, SEED_JACOBIANS):
+        lines.append(f"| {axis} | {m.k_counts_s_v:.5g} | {impulse_jacobian(m, cfg):.4f} | {seed:.4f} |")
+    return lines
 
 
 def default_jobs() -> list[Path]:
@@ -138,7 +151,7 @@ def default_jobs() -> list[Path]:
 
 def headlines(results: dict) -> list[dict]:
     """Per job and plant: the lowest RMS contour error's controller, the best neural and the best
-    baseline, and whether a baseline wins."""
+    baseline, and whether a baseline wins ("yes", "no", "tie"; when both kinds ran)."""
     out = []
     for job, by_plant in results.items():
         for plant, row in by_plant.items():
@@ -152,7 +165,9 @@ def headlines(results: dict) -> list[dict]:
             if nn:
                 n = min(nn, key=lambda k: row[k]["contour_rms_um"])
                 h.update(best_neural=n, best_neural_rms_um=row[n]["contour_rms_um"])
-            h["baseline_wins"] = best in BASELINES
+            if base and nn:
+                b_rms, n_rms = h["best_baseline_rms_um"], h["best_neural_rms_um"]
+                h["baseline_wins"] = "yes" if b_rms < n_rms else "no" if n_rms < b_rms else "tie"
             out.append(h)
     return out
 
@@ -170,13 +185,13 @@ def markdown(results: dict, headline: list[dict], pngs: list[Path], out_dir: Pat
              "Python integer models against the plant; contour errors in µm on the carriage's true position. "
              "`diverged` (neural controllers): clamps over 1 % of updates, or a largest contour error over 10x the "
              "tuned PID's (at least one count) on the same job and plant.", "",
-             *(list(preamble) + [""] if preamble else []), "## Headline (lowest RMS contour error)", "",
+             *preamble, "## Headline (lowest RMS contour error)", "",
              "| job | plant | best | best baseline | best neural | a baseline wins |", "|---|---|---|---|---|---|"]
     for h in headline:
         lines.append(f"| {h['job']} | {h['plant']} | {h['best']} ({_f(h['best_rms_um'])}) | "
                      f"{h.get('best_baseline', '–')} ({_f(h.get('best_baseline_rms_um'))}) | "
                      f"{h.get('best_neural', '–')} ({_f(h.get('best_neural_rms_um'))}) | "
-                     f"{'yes' if h['baseline_wins'] else 'no'} |")
+                     f"{h.get('baseline_wins', '–')} |")
     for job, by_plant in results.items():
         lines += ["", f"## {job}", "",
                   "| plant | controller | contour max | contour RMS | at reversals | steady state | saturated % "

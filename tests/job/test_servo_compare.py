@@ -34,7 +34,7 @@ def compared(tmp_path_factory):
     models = plant_models(scn.servo)
     gains = {k: tune(k, scn.servo, models, ref.counts, 4, 1) for k in ("pid", "ccc")}
     gains["nn_vector"], _ = pretrain("nn_vector", scn.servo, models, (0.0, 0.0), 1, 1, [("short", ref.counts)])
-    out = compare(scn, gains, tmp / "out", say=lambda s: None, jobs=[job])
+    out = compare(scn, gains, models, tmp / "out", say=lambda s: None, jobs=[job])
     return scn, ref, gains, out, tmp / "out"
 
 
@@ -64,11 +64,14 @@ def test_the_table_the_json_and_the_learning_curves(compared):
         assert md.count(f"| short.gcode | {plant} |") == 1
     assert json.loads((d / "compare.json").read_text())["headline"] == out["headline"]
     assert out["figures"] == [str(d / "learning_short_nn_vector.png")]
+    assert "| X | " in md and "| 1.0103 |" in md and "| 0.6047 |" in md  # ours beside the seed's
     assert (d / "learning_short_nn_vector.png").stat().st_size > 10_000
     for h in out["headline"]:
         row = out["results"][h["job"]][h["plant"]]
         assert h["best_rms_um"] == min(r["contour_rms_um"] for r in row.values())
-        assert h["baseline_wins"] == (h["best"] in ("pid", "ccc"))
+        b, n = h["best_baseline_rms_um"], h["best_neural_rms_um"]
+        assert h["baseline_wins"] == ("yes" if b < n else "no" if n < b else "tie")
+        assert h["best_neural"] == "nn_vector" and b == min(row[k]["contour_rms_um"] for k in ("pid", "ccc"))
 
 
 def test_the_diverged_rule():
