@@ -94,7 +94,8 @@ def compare(scn, gains: dict, models, out_dir: Path, say=print, jobs=None, plant
     """Run every controller in `gains` (kind -> gains, or params for a neural one) on every plant and
     job (paths; default: every datasets/jobs/servo_*.gcode and the reference job); write
     OUT/compare.md (the identified `models`' impulse Jacobians beside the seed's when given, then
-    `preamble`: markdown lines before its tables), compare.json and the learning curves. Returns {"results": job -> plant -> kind -> figures, "headline": [...], "markdown":
+    `preamble`: markdown lines before its tables), compare.json and the learning curves. Returns
+    {"results": job -> plant -> kind -> figures, "headline": [...], "markdown":
     path, "figures": [png paths]}."""
     from nnik.job.parse import JobRequest
     from nnik.job.reference import job_reference
@@ -137,7 +138,8 @@ def jacobian_lines(models, cfg) -> list[str]:
     from nnik.implementations.servo.nn.jacobian import SEED_JACOBIANS, impulse_jacobian
 
     lines = ["Plant Jacobians by the seed's impulse method (normalised to 12 V and 40 mm, per volt-second; "
-             "nnik.implementations.servo.nn.jacobian):", "", "| axis | identified K counts/s/V | ours 1/s | seed's rig |",
+             "nnik.implementations.servo.nn.jacobian):", "",
+             "| axis | identified K counts/s/V | ours 1/s | seed's rig |",
              "|---|---|---|---|"]
     for axis, m, seed in zip("XY", models, SEED_JACOBIANS):
         lines.append(f"| {axis} | {m.k_counts_s_v:.5g} | {impulse_jacobian(m, cfg):.4f} | {seed:.4f} |")
@@ -149,25 +151,32 @@ def default_jobs() -> list[Path]:
     return sorted(jobs.glob("servo_*.gcode")) + [jobs / "xy_table_reference.gcode"]
 
 
+def _best(row: dict, kinds, key: str) -> str | None:
+    have = [k for k in row if k in kinds and row[k][key] is not None]
+    return min(have, key=lambda k: row[k][key]) if have else None
+
+
+def _wins(b: float, n: float) -> str:
+    return "yes" if b < n else "no" if n < b else "tie"
+
+
 def headlines(results: dict) -> list[dict]:
-    """Per job and plant: the lowest RMS contour error's controller, the best neural and the best
-    baseline, and whether a baseline wins ("yes", "no", "tie"; when both kinds ran)."""
+    """Per job and plant, by RMS contour error (and by steady-state error where the job has steps):
+    the best controller, the best baseline and the best neural one, and whether a baseline wins
+    ("yes", "no", "tie"; when both kinds ran)."""
     out = []
     for job, by_plant in results.items():
         for plant, row in by_plant.items():
-            best = min(row, key=lambda k: row[k]["contour_rms_um"])
-            base = [k for k in row if k in BASELINES]
-            nn = [k for k in row if k in NEURAL]
+            best = _best(row, row, "contour_rms_um")
             h = {"job": job, "plant": plant, "best": best, "best_rms_um": row[best]["contour_rms_um"]}
-            if base:
-                b = min(base, key=lambda k: row[k]["contour_rms_um"])
-                h.update(best_baseline=b, best_baseline_rms_um=row[b]["contour_rms_um"])
-            if nn:
-                n = min(nn, key=lambda k: row[k]["contour_rms_um"])
-                h.update(best_neural=n, best_neural_rms_um=row[n]["contour_rms_um"])
-            if base and nn:
-                b_rms, n_rms = h["best_baseline_rms_um"], h["best_neural_rms_um"]
-                h["baseline_wins"] = "yes" if b_rms < n_rms else "no" if n_rms < b_rms else "tie"
+            for key, tag in (("contour_rms_um", "rms_um"), ("steady_state_um", "steady_um")):
+                b, n = _best(row, BASELINES, key), _best(row, NEURAL, key)
+                if b:
+                    h[f"baseline_{tag}"] = [b, row[b][key]]
+                if n:
+                    h[f"neural_{tag}"] = [n, row[n][key]]
+                if b and n:
+                    h[f"baseline_wins_{tag}"] = _wins(row[b][key], row[n][key])
             out.append(h)
     return out
 
@@ -185,13 +194,21 @@ def markdown(results: dict, headline: list[dict], pngs: list[Path], out_dir: Pat
              "Python integer models against the plant; contour errors in µm on the carriage's true position. "
              "`diverged` (neural controllers): clamps over 1 % of updates, or a largest contour error over 10x the "
              "tuned PID's (at least one count) on the same job and plant.", "",
-             *preamble, "## Headline (lowest RMS contour error)", "",
-             "| job | plant | best | best baseline | best neural | a baseline wins |", "|---|---|---|---|---|---|"]
+             *preamble, "## Headline", "",
+             "RMS contour error and, on jobs with steps, the steady-state error (the largest over the steps), µm: "
+             "the best baseline against the best neural controller.", "",
+             "| job | plant | best (RMS contour) | baseline | neural | a baseline wins | steady state: baseline "
+             "| neural | a baseline wins |", "|---|---|---|---|---|---|---|---|---|"]
+
+    def pair(h, key):
+        return f"{h[key][0]} ({_f(h[key][1])})" if key in h else "–"
+
     for h in headline:
         lines.append(f"| {h['job']} | {h['plant']} | {h['best']} ({_f(h['best_rms_um'])}) | "
-                     f"{h.get('best_baseline', '–')} ({_f(h.get('best_baseline_rms_um'))}) | "
-                     f"{h.get('best_neural', '–')} ({_f(h.get('best_neural_rms_um'))}) | "
-                     f"{h.get('baseline_wins', '–')} |")
+                     f"{pair(h, 'baseline_rms_um')} | {pair(h, 'neural_rms_um')} | "
+                     f"{h.get('baseline_wins_rms_um', '–')} | "
+                     f"{pair(h, 'baseline_steady_um')} | {pair(h, 'neural_steady_um')} | "
+                     f"{h.get('baseline_wins_steady_um', '–')} |")
     for job, by_plant in results.items():
         lines += ["", f"## {job}", "",
                   "| plant | controller | contour max | contour RMS | at reversals | steady state | saturated % "

@@ -69,9 +69,10 @@ def test_the_table_the_json_and_the_learning_curves(compared):
     for h in out["headline"]:
         row = out["results"][h["job"]][h["plant"]]
         assert h["best_rms_um"] == min(r["contour_rms_um"] for r in row.values())
-        b, n = h["best_baseline_rms_um"], h["best_neural_rms_um"]
-        assert h["baseline_wins"] == ("yes" if b < n else "no" if n < b else "tie")
-        assert h["best_neural"] == "nn_vector" and b == min(row[k]["contour_rms_um"] for k in ("pid", "ccc"))
+        for key, tag in (("contour_rms_um", "rms_um"), ("steady_state_um", "steady_um")):
+            (bk, b), (nk, n) = h[f"baseline_{tag}"], h[f"neural_{tag}"]
+            assert h[f"baseline_wins_{tag}"] == ("yes" if b < n else "no" if n < b else "tie")
+            assert nk == "nn_vector" and b == min(row[k][key] for k in ("pid", "ccc")) == row[bk][key]
 
 
 def test_the_diverged_rule():
