@@ -90,7 +90,7 @@ def diverged(r: dict, pid: dict | None, um_per_count: float) -> str | None:
     return None
 
 
-def compare(scn, gains: dict, models, out_dir: Path, say=print, jobs=None, plants=PLANTS, preamble=()) -> dict:
+def compare(scn, gains: dict, out_dir: Path, say=print, jobs=None, plants=PLANTS, preamble=(), models=None) -> dict:
     """Run every controller in `gains` (kind -> gains, or params for a neural one) on every plant and
     job (paths; default: every datasets/jobs/servo_*.gcode and the reference job); write
     OUT/compare.md (the identified `models`' impulse Jacobians beside the seed's when given, then

@@ -34,7 +34,7 @@ def compared(tmp_path_factory):
     models = plant_models(scn.servo)
     gains = {k: tune(k, scn.servo, models, ref.counts, 4, 1) for k in ("pid", "ccc")}
     gains["nn_vector"], _ = pretrain("nn_vector", scn.servo, models, (0.0, 0.0), 1, 1, [("short", ref.counts)])
-    out = compare(scn, gains, models, tmp / "out", say=lambda s: None, jobs=[job])
+    out = compare(scn, gains, tmp / "out", say=lambda s: None, jobs=[job], models=models)
     return scn, ref, gains, out, tmp / "out"
 
 
