@@ -33,6 +33,7 @@ from pathlib import Path
 
 import numpy as np
 
+from nnik.errors import NnikError
 from nnik.files.atomic_write import write_file_atomic
 from nnik.implementations.servo import BASELINES, NEURAL, make
 
@@ -51,7 +52,7 @@ def make_plant(name: str, cfg, ticks: int, start: tuple[int, int]):
         return DriftPlant(cfg, ticks, JOB_DRIFT, PIECES, start)
     if name == "differing":
         return Plant(differing(cfg), start)
-    raise ValueError(f"unknown plant {name!r} (known: {', '.join(PLANTS)})")
+    raise NnikError(f"unknown plant {name!r} (known: {', '.join(PLANTS)})")
 
 
 def run_one(kind: str, gains: dict, cfg, ref, plant_name: str) -> tuple[dict, dict]:
