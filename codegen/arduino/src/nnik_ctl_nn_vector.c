@@ -27,8 +27,8 @@ void nnik_ctl_reset(void)
 static int16_t nnik_nnv_split(int16_t u, int16_t e, int32_t inv, int16_t c)
 {
     int16_t unit = (int16_t)(((int32_t)e * inv + (1L << 15)) >> 16); /* Q14, |e| <= m */
-    int16_t t = (int16_t)((nnik_nn_mul(u, unit) + (1L << 10)) >> 11);  /* Q3 duty */
-    return nnik_ctl_duty(nnik_nn_mul(t, c) >> 3);
+    int16_t t = (int16_t)nnik_nn_asr(nnik_nn_mac(1L << 10, u, unit), 11); /* Q3 duty */
+    return nnik_ctl_duty(nnik_nn_asr(nnik_nn_mac(0, t, c), 3));
 }
 
 void nnik_ctl_tick(const int32_t ref[2], const int32_t pos[2], int16_t duty[2])
@@ -36,11 +36,10 @@ void nnik_ctl_tick(const int32_t ref[2], const int32_t pos[2], int16_t duty[2])
     int16_t ex = nnik_ctl_s16(ref[0] - pos[0]), ey = nnik_ctl_s16(ref[1] - pos[1]), x[NNIK_NN_IN];
     int16_t rx = nnik_ctl_s16(ref[0] >> NNIK_NN_R_SHIFT), ry = nnik_ctl_s16(ref[1] >> NNIK_NN_R_SHIFT);
     int32_t m, m1, m2, r;
-    uint16_t sum = 0;
     if (!nnik_nnv_loaded) /* zeroed statics at power-on: start from the initial weights */
         nnik_ctl_reset();
-    m = (int32_t)nnik_isqrt32((uint32_t)nnik_nn_mul(ex, ex) + (uint32_t)nnik_nn_mul(ey, ey));
-    r = (int32_t)nnik_isqrt32((uint32_t)nnik_nn_mul(rx, rx) + (uint32_t)nnik_nn_mul(ry, ry));
+    m = (int32_t)nnik_isqrt32((uint32_t)nnik_nn_mac(0, ex, ex) + (uint32_t)nnik_nn_mac(0, ey, ey));
+    r = (int32_t)nnik_isqrt32((uint32_t)nnik_nn_mac(0, rx, rx) + (uint32_t)nnik_nn_mac(0, ry, ry));
     m1 = nnik_nnv_primed ? nnik_nnv_m1 : m;
     m2 = nnik_nnv_primed ? nnik_nnv_m2 : m1;
     x[0] = NNIK_NN_SCALE(m, NNIK_NN_IN_SHIFT_0);
@@ -49,11 +48,9 @@ void nnik_ctl_tick(const int32_t ref[2], const int32_t pos[2], int16_t duty[2])
     x[3] = NNIK_NN_SCALE(r, NNIK_NN_IN_SHIFT_3);
     nnik_nnv_m2 = m1;
     nnik_nnv_m1 = m;
-    if (nnik_nnv_primed)
-        nnik_nn_learn(&nnik_nnv_net, x[0]);
-    nnik_nnv_net.u = nnik_ctl_duty(nnik_nn_forward(&nnik_nnv_net, x, &sum));
+    nnik_ctl_sum = 0;
+    nnik_nnv_net.u = nnik_ctl_duty(nnik_nn_step(&nnik_nnv_net, x, x[0], &nnik_ctl_sum));
     nnik_nnv_primed = 1;
-    nnik_ctl_sum = sum;
     if (m == 0) {
         duty[0] = 0;
         duty[1] = 0;

@@ -19,10 +19,13 @@ float, no int64, no 32 x 32 product except the vector split's unit vector (nn_ve
            x_0 the net's own (scaled, saturated) error input; nn_vector: d = x_0 = scaled |e| >= 0.
     g_j    1 - h_j^2 = 32767 - (h_j h_j >> 15), Q15 in [1, 32767].
     dh_j   delta_h = (sat16((d (w2_j >> 16)) >> 12) g_j) >> 15, int16 Q12 (saturates at 8.0).
-    dW2_j  = rnd(d h_j, eta)       (Q27 product into the Q28 master: learning rate 2^(1 - eta))
-    dW1_ji = rnd(dh_j x_i, eta + 3) (Q24 product into the Q28 master: the same learning rate)
-           rnd(p, s) = (p + (2^s >> 1)) >> s, rounding half up; |p| < 2^30, so master + dW < 2^31
-           before the clamp. eta = eta_shift, 0 .. 27.
+    dW2_j  = rnd(rnd(d, eta & 7) h_j, eta & ~7)        Q27 product into the Q28 master: learning
+                                                       rate 2^(1 - eta) in real units
+    dW1_ji = rnd(rnd(dh_j, s1 & 7) x_i, s1 & ~7)       s1 = eta + 3 (a Q24 product): the same rate
+           rnd(p, s) = (p + (2^s >> 1)) >> s, rounding half up. The rate's low bits shift the int16
+           delta once per unit, its whole bytes the product (byte moves on the AVR: a 32-bit shift by
+           a constant costs 6 cycles a bit there). |p| < 2^30, so master + dW < 2^31 before the
+           clamp. eta = eta_shift, 0 .. 27.
 
 The weights' checksum is the sum of every master word's low 16 bits, mod 2^16 (uint16).
 """

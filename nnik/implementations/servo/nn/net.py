@@ -51,15 +51,17 @@ class Net:
             counts["held"] += 1
             return
         x = self.x
+        s1 = eta + f.W1_EXTRA
+        d2 = f.rnd(d, eta & 7)
         for j in range(f.N_HID):
             hj = self.h[j]
             g = f.I16 - ((hj * hj) >> 15)
             t = f.sat((d * (self.w2[j] >> 16)) >> 12, f.I16)
-            dh = (t * g) >> 15
-            self.w2[j] = self._clamp(self.w2[j] + f.rnd(d * hj, eta), f.W2_LIM, counts)
+            dh = f.rnd((t * g) >> 15, s1 & 7)
+            self.w2[j] = self._clamp(self.w2[j] + f.rnd(d2 * hj, eta & ~7), f.W2_LIM, counts)
             row = self.w1[j]
             for i in range(f.N_IN):
-                row[i] = self._clamp(row[i] + f.rnd(dh * x[i], eta + f.W1_EXTRA), f.W1_LIM, counts)
+                row[i] = self._clamp(row[i] + f.rnd(dh * x[i], s1 & ~7), f.W1_LIM, counts)
         counts["updates"] += f.N_HID * (f.N_IN + 1)
 
     @staticmethod
