@@ -11,9 +11,11 @@ Plants (nnik.dynamics.servo.drift):
 Every controller starts each job from power-on (reset(): the neural ones from their pretrained
 weights) and the neural ones learn online throughout.
 
-Measures (nnik.job.servo_measure, on the carriage's true position): contour error max and RMS,
-the largest contour error near a reversal, the steady-state error (the largest over the job's
-steps), the share of saturated ticks; for the neural controllers the weight clamps and updates.
+Measures (nnik.job.servo_measure, on the carriage's true position): contour error max and RMS
+(the distance to the whole path: blind to a lag along it), the tracking error's RMS (the distance
+to the tick's reference point, both axes: what a lag costs), the largest contour error near a
+reversal, the steady-state error (the largest over the job's steps), the share of saturated
+ticks; for the neural controllers the weight clamps and updates.
 A neural controller's run is flagged `diverged` (issue 29 item 4) when its clamps pass 1 % of its
 updates ("clamps"), or when its largest contour error passes 10x the tuned PID's largest on the
 same job and plant, the PID's taken as at least one encoder count (a single-axis step's contour
@@ -38,6 +40,7 @@ from nnik.files.atomic_write import write_file_atomic
 from nnik.implementations.servo import BASELINES, NEURAL, make
 
 PLANTS = ("nominal", "drift", "differing")
+METRICS = (("contour_rms_um", "rms_um"), ("tracking_rms_um", "tracking_um"), ("steady_state_um", "steady_um"))
 DIVERGED_CLAMP_SHARE = 0.01
 DIVERGED_PID_FACTOR = 10.0
 
@@ -76,6 +79,7 @@ def run_one(kind: str, gains: dict, cfg, ref, plant_name: str) -> tuple[dict, di
     clamps, updates = int(getattr(ctl, "clamps", 0)), int(getattr(ctl, "updates", 0))
     out = {"contour_max_um": fig["contour_um"]["max_um"], "contour_rms_um": fig["contour_um"]["rms_um"],
            "reversal_max_um": fig["reversals"]["max_um"], "steady_state_um": max(steady) if steady else None,
+           "tracking_rms_um": float(np.hypot(fig["tracking_um"]["x"]["rms_um"], fig["tracking_um"]["y"]["rms_um"])),
            "saturated_fraction": fig["saturated_fraction"], "final_error_um": fig["final_error_um"],
            "clamps": clamps, "updates": updates,
            "clamp_share": clamps / updates if updates else 0.0}
@@ -162,7 +166,8 @@ def _wins(b: float, n: float) -> str:
 
 
 def headlines(results: dict) -> list[dict]:
-    """Per job and plant, by RMS contour error (and by steady-state error where the job has steps):
+    """Per job and plant, by RMS contour error, RMS tracking error and (where the job has steps)
+    steady-state error:
     the best controller, the best baseline and the best neural one, and whether a baseline wins
     ("yes", "no", "tie"; when both kinds ran)."""
     out = []
@@ -170,7 +175,7 @@ def headlines(results: dict) -> list[dict]:
         for plant, row in by_plant.items():
             best = _best(row, row, "contour_rms_um")
             h = {"job": job, "plant": plant, "best": best, "best_rms_um": row[best]["contour_rms_um"]}
-            for key, tag in (("contour_rms_um", "rms_um"), ("steady_state_um", "steady_um")):
+            for key, tag in METRICS:
                 b, n = _best(row, BASELINES, key), _best(row, NEURAL, key)
                 if b:
                     h[f"baseline_{tag}"] = [b, row[b][key]]
@@ -196,27 +201,28 @@ def markdown(results: dict, headline: list[dict], pngs: list[Path], out_dir: Pat
              "`diverged` (neural controllers): clamps over 1 % of updates, or a largest contour error over 10x the "
              "tuned PID's (at least one count) on the same job and plant.", "",
              *preamble, "## Headline", "",
-             "RMS contour error and, on jobs with steps, the steady-state error (the largest over the steps), µm: "
-             "the best baseline against the best neural controller.", "",
-             "| job | plant | best (RMS contour) | baseline | neural | a baseline wins | steady state: baseline "
-             "| neural | a baseline wins |", "|---|---|---|---|---|---|---|---|---|"]
+             "RMS contour error, RMS tracking error and, on jobs with steps, the steady-state error (the largest "
+             "over the steps), µm: the best baseline against the best neural controller, and whether the baseline "
+             "wins.", "",
+             "| job | plant | best (RMS contour) | contour: baseline | neural | wins | tracking: baseline | neural "
+             "| wins | steady state: baseline | neural | wins |", "|---|---|---|---|---|---|---|---|---|---|---|---|"]
 
     def pair(h, key):
         return f"{h[key][0]} ({_f(h[key][1])})" if key in h else "–"
 
     for h in headline:
-        lines.append(f"| {h['job']} | {h['plant']} | {h['best']} ({_f(h['best_rms_um'])}) | "
-                     f"{pair(h, 'baseline_rms_um')} | {pair(h, 'neural_rms_um')} | "
-                     f"{h.get('baseline_wins_rms_um', '–')} | "
-                     f"{pair(h, 'baseline_steady_um')} | {pair(h, 'neural_steady_um')} | "
-                     f"{h.get('baseline_wins_steady_um', '–')} |")
+        cells = [f"{pair(h, 'baseline_' + t)} | {pair(h, 'neural_' + t)} | {h.get('baseline_wins_' + t, '–')}"
+                 for _, t in METRICS]
+        head = f"| {h['job']} | {h['plant']} | {h['best']} ({_f(h['best_rms_um'])}) | "
+        lines.append(head + " | ".join(cells) + " |")
     for job, by_plant in results.items():
         lines += ["", f"## {job}", "",
-                  "| plant | controller | contour max | contour RMS | at reversals | steady state | saturated % "
-                  "| clamps / updates | diverged |", "|---|---|---|---|---|---|---|---|---|"]
+                  "| plant | controller | contour max | contour RMS | tracking RMS | at reversals | steady state "
+                  "| saturated % | clamps / updates | diverged |", "|---|---|---|---|---|---|---|---|---|---|"]
         for plant, row in by_plant.items():
             for kind, r in row.items():
                 lines.append(f"| {plant} | {kind} | {_f(r['contour_max_um'])} | {_f(r['contour_rms_um'])} | "
+                             f"{_f(r['tracking_rms_um'])} | "
                              f"{_f(r['reversal_max_um'])} | {_f(r['steady_state_um'])} | "
                              f"{100 * r['saturated_fraction']:.1f} | {r['clamps']} / {r['updates']} | "
                              f"{_flag(kind, r['diverged'])} |")

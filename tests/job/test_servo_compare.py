@@ -15,7 +15,7 @@ from nnik.implementations.servo.nn.pretrain import pretrain
 from nnik.implementations.servo.tune import tune
 from nnik.job.parse import JobRequest
 from nnik.job.reference import job_reference
-from nnik.job.servo_compare import PLANTS, compare, diverged
+from nnik.job.servo_compare import METRICS, PLANTS, compare, diverged
 from nnik.job.servo_measure import measure
 from nnik.machine.scenario import load_scenario
 from tests.conftest import DATASETS
@@ -45,7 +45,7 @@ def test_every_controller_on_every_plant(compared):
     for plant in PLANTS:
         assert list(res[plant]) == ["pid", "ccc", "nn_vector"]
         for kind, r in res[plant].items():
-            assert r["contour_max_um"] >= r["contour_rms_um"] >= 0
+            assert r["contour_max_um"] >= r["contour_rms_um"] >= 0 and r["tracking_rms_um"] >= 0
             assert (r["updates"] > 0) == (kind == "nn_vector")
     # the nominal plant is the closed-loop job's own loop and measure
     for kind in ("pid", "nn_vector"):
@@ -69,7 +69,7 @@ def test_the_table_the_json_and_the_learning_curves(compared):
     for h in out["headline"]:
         row = out["results"][h["job"]][h["plant"]]
         assert h["best_rms_um"] == min(r["contour_rms_um"] for r in row.values())
-        for key, tag in (("contour_rms_um", "rms_um"), ("steady_state_um", "steady_um")):
+        for key, tag in METRICS:
             (bk, b), (nk, n) = h[f"baseline_{tag}"], h[f"neural_{tag}"]
             assert h[f"baseline_wins_{tag}"] == ("yes" if b < n else "no" if n < b else "tie")
             assert nk == "nn_vector" and b == min(row[k][key] for k in ("pid", "ccc")) == row[bk][key]
