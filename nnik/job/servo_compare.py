@@ -11,9 +11,11 @@ Plants (nnik.dynamics.servo.drift):
 Every controller starts each job from power-on (reset(): the neural ones from their pretrained
 weights) and the neural ones learn online throughout.
 
-Measures (nnik.job.servo_measure, on the carriage's true position): contour error max and RMS,
-the largest contour error near a reversal, the steady-state error (the largest over the job's
-steps), the share of saturated ticks; for the neural controllers the weight clamps and updates.
+Measures (nnik.job.servo_measure, on the carriage's true position): contour error max and RMS
+(the distance to the whole path: blind to a lag along it), the tracking error's RMS (the distance
+to the tick's reference point, both axes: what a lag costs), the largest contour error near a
+reversal, the steady-state error (the largest over the job's steps), the share of saturated
+ticks; for the neural controllers the weight clamps and updates.
 A neural controller's run is flagged `diverged` (issue 29 item 4) when its clamps pass 1 % of its
 updates ("clamps"), or when its largest contour error passes 10x the tuned PID's largest on the
 same job and plant, the PID's taken as at least one encoder count (a single-axis step's contour
@@ -33,10 +35,12 @@ from pathlib import Path
 
 import numpy as np
 
+from nnik.errors import NnikError
 from nnik.files.atomic_write import write_file_atomic
 from nnik.implementations.servo import BASELINES, NEURAL, make
 
 PLANTS = ("nominal", "drift", "differing")
+METRICS = (("contour_rms_um", "rms_um"), ("tracking_rms_um", "tracking_um"), ("steady_state_um", "steady_um"))
 DIVERGED_CLAMP_SHARE = 0.01
 DIVERGED_PID_FACTOR = 10.0
 
@@ -51,7 +55,7 @@ def make_plant(name: str, cfg, ticks: int, start: tuple[int, int]):
         return DriftPlant(cfg, ticks, JOB_DRIFT, PIECES, start)
     if name == "differing":
         return Plant(differing(cfg), start)
-    raise ValueError(f"unknown plant {name!r} (known: {', '.join(PLANTS)})")
+    raise NnikError(f"unknown plant {name!r} (known: {', '.join(PLANTS)})")
 
 
 def run_one(kind: str, gains: dict, cfg, ref, plant_name: str) -> tuple[dict, dict]:
@@ -75,6 +79,7 @@ def run_one(kind: str, gains: dict, cfg, ref, plant_name: str) -> tuple[dict, di
     clamps, updates = int(getattr(ctl, "clamps", 0)), int(getattr(ctl, "updates", 0))
     out = {"contour_max_um": fig["contour_um"]["max_um"], "contour_rms_um": fig["contour_um"]["rms_um"],
            "reversal_max_um": fig["reversals"]["max_um"], "steady_state_um": max(steady) if steady else None,
+           "tracking_rms_um": float(np.hypot(fig["tracking_um"]["x"]["rms_um"], fig["tracking_um"]["y"]["rms_um"])),
            "saturated_fraction": fig["saturated_fraction"], "final_error_um": fig["final_error_um"],
            "clamps": clamps, "updates": updates,
            "clamp_share": clamps / updates if updates else 0.0}
@@ -90,11 +95,12 @@ def diverged(r: dict, pid: dict | None, um_per_count: float) -> str | None:
     return None
 
 
-def compare(scn, gains: dict, out_dir: Path, say=print, jobs=None, plants=PLANTS, preamble=()) -> dict:
+def compare(scn, gains: dict, out_dir: Path, say=print, jobs=None, plants=PLANTS, preamble=(), models=None) -> dict:
     """Run every controller in `gains` (kind -> gains, or params for a neural one) on every plant and
     job (paths; default: every datasets/jobs/servo_*.gcode and the reference job); write
-    OUT/compare.md (`preamble`: markdown lines before its tables), compare.json and the learning
-    curves. Returns {"results": job -> plant -> kind -> figures, "headline": [...], "markdown":
+    OUT/compare.md (the identified `models`' impulse Jacobians beside the seed's when given, then
+    `preamble`: markdown lines before its tables), compare.json and the learning curves. Returns
+    {"results": job -> plant -> kind -> figures, "headline": [...], "markdown":
     path, "figures": [png paths]}."""
     from nnik.job.parse import JobRequest
     from nnik.job.reference import job_reference
@@ -126,9 +132,23 @@ def compare(scn, gains: dict, out_dir: Path, say=print, jobs=None, plants=PLANTS
                                        f"{kind} on {name}: learning online", by_plant, ref.tick_s))
     headline = headlines(results)
     md = out_dir / "compare.md"
-    write_file_atomic(md, markdown(results, headline, pngs, out_dir, preamble))
+    pre = (jacobian_lines(models, cfg) + [""] if models is not None else []) + [x for p in preamble for x in (p, "")]
+    write_file_atomic(md, markdown(results, headline, pngs, out_dir, pre))
     write_file_atomic(out_dir / "compare.json", json.dumps({"results": results, "headline": headline}, indent=2) + "\n")
     return {"results": results, "headline": headline, "markdown": str(md), "figures": [str(p) for p in pngs]}
+
+
+def jacobian_lines(models, cfg) -> list[str]:
+    """The identified models' impulse Jacobians beside the seed's (its rig), as a markdown table."""
+    from nnik.implementations.servo.nn.jacobian import SEED_JACOBIANS, impulse_jacobian
+
+    lines = ["Plant Jacobians by the seed's impulse method (normalised to 12 V and 40 mm, per volt-second; "
+             "nnik.implementations.servo.nn.jacobian):", "",
+             "| axis | identified K counts/s/V | ours 1/s | seed's rig |",
+             "|---|---|---|---|"]
+    for axis, m, seed in zip("XY", models, SEED_JACOBIANS):
+        lines.append(f"| {axis} | {m.k_counts_s_v:.5g} | {impulse_jacobian(m, cfg):.4f} | {seed:.4f} |")
+    return lines
 
 
 def default_jobs() -> list[Path]:
@@ -136,23 +156,33 @@ def default_jobs() -> list[Path]:
     return sorted(jobs.glob("servo_*.gcode")) + [jobs / "xy_table_reference.gcode"]
 
 
+def _best(row: dict, kinds, key: str) -> str | None:
+    have = [k for k in row if k in kinds and row[k][key] is not None]
+    return min(have, key=lambda k: row[k][key]) if have else None
+
+
+def _wins(b: float, n: float) -> str:
+    return "yes" if b < n else "no" if n < b else "tie"
+
+
 def headlines(results: dict) -> list[dict]:
-    """Per job and plant: the lowest RMS contour error's controller, the best neural and the best
-    baseline, and whether a baseline wins."""
+    """Per job and plant, by RMS contour error, RMS tracking error and (where the job has steps)
+    steady-state error:
+    the best controller, the best baseline and the best neural one, and whether a baseline wins
+    ("yes", "no", "tie"; when both kinds ran)."""
     out = []
     for job, by_plant in results.items():
         for plant, row in by_plant.items():
-            best = min(row, key=lambda k: row[k]["contour_rms_um"])
-            base = [k for k in row if k in BASELINES]
-            nn = [k for k in row if k in NEURAL]
+            best = _best(row, row, "contour_rms_um")
             h = {"job": job, "plant": plant, "best": best, "best_rms_um": row[best]["contour_rms_um"]}
-            if base:
-                b = min(base, key=lambda k: row[k]["contour_rms_um"])
-                h.update(best_baseline=b, best_baseline_rms_um=row[b]["contour_rms_um"])
-            if nn:
-                n = min(nn, key=lambda k: row[k]["contour_rms_um"])
-                h.update(best_neural=n, best_neural_rms_um=row[n]["contour_rms_um"])
-            h["baseline_wins"] = best in BASELINES
+            for key, tag in METRICS:
+                b, n = _best(row, BASELINES, key), _best(row, NEURAL, key)
+                if b:
+                    h[f"baseline_{tag}"] = [b, row[b][key]]
+                if n:
+                    h[f"neural_{tag}"] = [n, row[n][key]]
+                if b and n:
+                    h[f"baseline_wins_{tag}"] = _wins(row[b][key], row[n][key])
             out.append(h)
     return out
 
@@ -170,20 +200,29 @@ def markdown(results: dict, headline: list[dict], pngs: list[Path], out_dir: Pat
              "Python integer models against the plant; contour errors in µm on the carriage's true position. "
              "`diverged` (neural controllers): clamps over 1 % of updates, or a largest contour error over 10x the "
              "tuned PID's (at least one count) on the same job and plant.", "",
-             *(list(preamble) + [""] if preamble else []), "## Headline (lowest RMS contour error)", "",
-             "| job | plant | best | best baseline | best neural | a baseline wins |", "|---|---|---|---|---|---|"]
+             *preamble, "## Headline", "",
+             "RMS contour error, RMS tracking error and, on jobs with steps, the steady-state error (the largest "
+             "over the steps), µm: the best baseline against the best neural controller, and whether the baseline "
+             "wins.", "",
+             "| job | plant | best (RMS contour) | contour: baseline | neural | wins | tracking: baseline | neural "
+             "| wins | steady state: baseline | neural | wins |", "|---|---|---|---|---|---|---|---|---|---|---|---|"]
+
+    def pair(h, key):
+        return f"{h[key][0]} ({_f(h[key][1])})" if key in h else "–"
+
     for h in headline:
-        lines.append(f"| {h['job']} | {h['plant']} | {h['best']} ({_f(h['best_rms_um'])}) | "
-                     f"{h.get('best_baseline', '–')} ({_f(h.get('best_baseline_rms_um'))}) | "
-                     f"{h.get('best_neural', '–')} ({_f(h.get('best_neural_rms_um'))}) | "
-                     f"{'yes' if h['baseline_wins'] else 'no'} |")
+        cells = [f"{pair(h, 'baseline_' + t)} | {pair(h, 'neural_' + t)} | {h.get('baseline_wins_' + t, '–')}"
+                 for _, t in METRICS]
+        head = f"| {h['job']} | {h['plant']} | {h['best']} ({_f(h['best_rms_um'])}) | "
+        lines.append(head + " | ".join(cells) + " |")
     for job, by_plant in results.items():
         lines += ["", f"## {job}", "",
-                  "| plant | controller | contour max | contour RMS | at reversals | steady state | saturated % "
-                  "| clamps / updates | diverged |", "|---|---|---|---|---|---|---|---|---|"]
+                  "| plant | controller | contour max | contour RMS | tracking RMS | at reversals | steady state "
+                  "| saturated % | clamps / updates | diverged |", "|---|---|---|---|---|---|---|---|---|---|"]
         for plant, row in by_plant.items():
             for kind, r in row.items():
                 lines.append(f"| {plant} | {kind} | {_f(r['contour_max_um'])} | {_f(r['contour_rms_um'])} | "
+                             f"{_f(r['tracking_rms_um'])} | "
                              f"{_f(r['reversal_max_um'])} | {_f(r['steady_state_um'])} | "
                              f"{100 * r['saturated_fraction']:.1f} | {r['clamps']} / {r['updates']} | "
                              f"{_flag(kind, r['diverged'])} |")

@@ -30,12 +30,17 @@ def pretrain_all(scn, models, coulomb_v, seed: int, episodes: int = EPISODES, sa
     params, logs = {}, {}
     for kind in kinds:
         params[kind], logs[kind] = pretrain(kind, scn.servo, models, coulomb_v, seed, episodes, tests)
-        lg = logs[kind]
-        worst = {n: f"{max(f['steady_state_um'], f['overshoot_um']):.0f}/{f['allowed_um']:.0f}"
-                 for n, f in lg["verify"].items()}
-        say(f"pretrained {kind} on the identified model: "
-            + (f"below 2 % after {lg['episodes']} episode(s)" if lg["passed"] else
-               f"NOT below 2 % within {lg['episodes']} episodes")
-            + f" (eta_shift {lg['eta_shift']}, in_shift {lg['in_shift']}; worst error / 2 % in um: "
-            + ", ".join(f"{n} {w}" for n, w in worst.items()) + ")")
+        say(summary(logs[kind]))
     return params, logs
+
+
+def summary(log: dict) -> str:
+    """One line: how many episodes, the chosen grid point, each test's worst error against its 2 %."""
+    worst = {n: f"{max(f['steady_state_um'], f['overshoot_um']):.0f}/{f['allowed_um']:.0f}"
+             for n, f in log["verify"].items()}
+    return (f"pretrained {log['kind']} on the identified model: "
+            + (f"below 2 % after {log['episodes']} episode(s)" if log["passed"] else
+               f"NOT below 2 % within {log['episodes']} episodes")
+            + f" (eta_shift {log['eta_shift']}, in_shift {log['in_shift']}; the pretrained weights from power-on, "
+            + "worst of steady-state error and overshoot / 2 % of the reference, um: "
+            + ", ".join(f"{n} {w}" for n, w in worst.items()) + ")")

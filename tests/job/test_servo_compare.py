@@ -15,7 +15,7 @@ from nnik.implementations.servo.nn.pretrain import pretrain
 from nnik.implementations.servo.tune import tune
 from nnik.job.parse import JobRequest
 from nnik.job.reference import job_reference
-from nnik.job.servo_compare import PLANTS, compare, diverged
+from nnik.job.servo_compare import METRICS, PLANTS, compare, diverged
 from nnik.job.servo_measure import measure
 from nnik.machine.scenario import load_scenario
 from tests.conftest import DATASETS
@@ -34,7 +34,7 @@ def compared(tmp_path_factory):
     models = plant_models(scn.servo)
     gains = {k: tune(k, scn.servo, models, ref.counts, 4, 1) for k in ("pid", "ccc")}
     gains["nn_vector"], _ = pretrain("nn_vector", scn.servo, models, (0.0, 0.0), 1, 1, [("short", ref.counts)])
-    out = compare(scn, gains, tmp / "out", say=lambda s: None, jobs=[job])
+    out = compare(scn, gains, tmp / "out", say=lambda s: None, jobs=[job], models=models)
     return scn, ref, gains, out, tmp / "out"
 
 
@@ -45,7 +45,7 @@ def test_every_controller_on_every_plant(compared):
     for plant in PLANTS:
         assert list(res[plant]) == ["pid", "ccc", "nn_vector"]
         for kind, r in res[plant].items():
-            assert r["contour_max_um"] >= r["contour_rms_um"] >= 0
+            assert r["contour_max_um"] >= r["contour_rms_um"] >= 0 and r["tracking_rms_um"] >= 0
             assert (r["updates"] > 0) == (kind == "nn_vector")
     # the nominal plant is the closed-loop job's own loop and measure
     for kind in ("pid", "nn_vector"):
@@ -64,11 +64,15 @@ def test_the_table_the_json_and_the_learning_curves(compared):
         assert md.count(f"| short.gcode | {plant} |") == 1
     assert json.loads((d / "compare.json").read_text())["headline"] == out["headline"]
     assert out["figures"] == [str(d / "learning_short_nn_vector.png")]
+    assert "| X | " in md and "| 1.0103 |" in md and "| 0.6047 |" in md  # ours beside the seed's
     assert (d / "learning_short_nn_vector.png").stat().st_size > 10_000
     for h in out["headline"]:
         row = out["results"][h["job"]][h["plant"]]
         assert h["best_rms_um"] == min(r["contour_rms_um"] for r in row.values())
-        assert h["baseline_wins"] == (h["best"] in ("pid", "ccc"))
+        for key, tag in METRICS:
+            (bk, b), (nk, n) = h[f"baseline_{tag}"], h[f"neural_{tag}"]
+            assert h[f"baseline_wins_{tag}"] == ("yes" if b < n else "no" if n < b else "tie")
+            assert nk == "nn_vector" and b == min(row[k][key] for k in ("pid", "ccc")) == row[bk][key]
 
 
 def test_the_diverged_rule():

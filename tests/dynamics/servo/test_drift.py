@@ -66,3 +66,22 @@ def test_the_differing_plant_is_slower_and_weaker(cfg):
         assert o.j_kg_m2 == n.j_kg_m2 * 1.4 and o.ra_ohm == n.ra_ohm * 1.2 and o.ke_v_s_rad == n.ke_v_s_rad * 0.9
         assert o.coulomb_n_m == n.coulomb_n_m * 1.5 and o.stiction_n_m == n.stiction_n_m * 1.5
         assert o.stall_current_a(12.0) * o.ke_v_s_rad < n.stall_current_a(12.0) * n.ke_v_s_rad
+
+
+@FAST
+@given(cfg=configs(stiction=True, backlash=True), seed=st.integers(0, 2**16), pieces=st.integers(2, 5))
+def test_each_piece_is_the_plant_of_its_parameters_exactly(cfg, seed, pieces):
+    """From a piece's first tick the drifting plant steps exactly as a Plant built with that piece's
+    parameters and handed the same state (current, speed, angle, stuck, counts, table)."""
+    rng = np.random.default_rng(seed)
+    per = 6
+    plant = DriftPlant(cfg, per * pieces, JOB_DRIFT, pieces, (7, 9))
+    duties = rng.integers(-cfg.duty_max, cfg.duty_max + 1, size=(per * pieces, 2)).tolist()
+    for p in range(pieces):
+        twin = Plant(JOB_DRIFT.at(p / (pieces - 1)).apply(cfg))
+        twin._x, twin._stuck = [x.copy() for x in plant._x], list(plant._stuck)
+        twin._counts, twin._table = list(plant._counts), list(plant._table)
+        for d in duties[p * per:(p + 1) * per]:
+            assert np.array_equal(plant.step(d), twin.step(d))
+            assert plant.table_um == twin.table_um
+        assert plant.cfg == twin.cfg
