@@ -108,7 +108,7 @@ def run_servo(scn, out: Path, say=print, use_chip: bool | None = None) -> dict:
     chip = _chip(out, scn, model, use_chip, say)
     from nnik.job.servo_compare import compare
 
-    cmp = compare(scn, gains, out / "report", say, jobs=[JOBS / j for j in TESTS])
+    cmp = compare(scn, gains, out / "report", say, jobs=[JOBS / j for j in TESTS], models=models)
     md = write_report(out, scn, fits, gains, best, results, chip,
                       {"why": why, "scores": scores, "pretrain": {k: lg for k, (_, lg) in pretrained.items()},
                        "compare": cmp})
