@@ -30,9 +30,9 @@ void nnik_ctl_reset(void)
 void nnik_ctl_tick(const int32_t ref[2], const int32_t pos[2], int16_t duty[2])
 {
     uint8_t a, j;
+    uint16_t sum = 0; /* the checksum, summed in the forward passes; nnik_ctl_sum is volatile */
     if (!nnik_nna_loaded) /* zeroed statics at power-on: start from the initial weights */
         nnik_ctl_reset();
-    nnik_ctl_sum = 0;
     for (a = 0; a < 2; a++) {
         nnik_nn_t *n = &nnik_nna_net[a];
         int32_t e = nnik_ctl_sat(ref[a] - pos[a], NNIK_NNA_E_MAX), e1 = e, e2 = e, v;
@@ -51,11 +51,12 @@ void nnik_ctl_tick(const int32_t ref[2], const int32_t pos[2], int16_t duty[2])
         x[2] = NNIK_NN_SCALE(e - 2 * e1 + e2, NNIK_NN_IN_SHIFT_2);
         x[3] = NNIK_NN_SCALE(v, NNIK_NN_IN_SHIFT_3);
         d = nnik_ctl_s16(nnik_nn_asr(nnik_nn_mac(0, x[0], a ? NNIK_NN_JY : NNIK_NN_JX), 12));
-        n->u = nnik_ctl_duty(nnik_nn_step(n, x, d, nnik_nna_phase, &nnik_ctl_sum));
+        n->u = nnik_ctl_duty(nnik_nn_step(n, x, d, nnik_nna_phase, &sum));
         duty[a] = n->u;
         nnik_nna_e2[a] = e1;
         nnik_nna_e1[a] = e;
     }
+    nnik_ctl_sum = sum;
     nnik_nna_idx = (uint8_t)((nnik_nna_idx + 1) & (NNIK_CTL_WIN - 1));
     nnik_nna_primed = 1;
     nnik_nna_phase ^= 1;

@@ -37,6 +37,7 @@ void nnik_ctl_tick(const int32_t ref[2], const int32_t pos[2], int16_t duty[2])
     int16_t ex = nnik_ctl_s16(ref[0] - pos[0]), ey = nnik_ctl_s16(ref[1] - pos[1]), x[NNIK_NN_IN];
     int16_t rx = nnik_ctl_s16(ref[0] >> NNIK_NN_R_SHIFT), ry = nnik_ctl_s16(ref[1] >> NNIK_NN_R_SHIFT);
     int32_t m, m1, m2, r;
+    uint16_t sum;
     if (!nnik_nnv_loaded) /* zeroed statics at power-on: start from the initial weights */
         nnik_ctl_reset();
     m = (int32_t)nnik_isqrt32((uint32_t)nnik_nn_mac(0, ex, ex) + (uint32_t)nnik_nn_mac(0, ey, ey));
@@ -49,8 +50,9 @@ void nnik_ctl_tick(const int32_t ref[2], const int32_t pos[2], int16_t duty[2])
     x[3] = NNIK_NN_SCALE(r, NNIK_NN_IN_SHIFT_3);
     nnik_nnv_m2 = m1;
     nnik_nnv_m1 = m;
-    nnik_ctl_sum = 0;
-    nnik_nnv_net.u = nnik_ctl_duty(nnik_nn_step(&nnik_nnv_net, x, x[0], nnik_nnv_phase, &nnik_ctl_sum));
+    sum = 0; /* the checksum, summed in the forward pass; nnik_ctl_sum is volatile */
+    nnik_nnv_net.u = nnik_ctl_duty(nnik_nn_step(&nnik_nnv_net, x, x[0], nnik_nnv_phase, &sum));
+    nnik_ctl_sum = sum;
     nnik_nnv_primed = 1;
     nnik_nnv_phase ^= 1;
     if (m == 0) {
