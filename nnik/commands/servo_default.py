@@ -7,7 +7,8 @@ neural one from its pretrained weights, learning as it runs) on the reference jo
 error is the one tuning minimises (nnik.implementations.servo.measure.score_run: the carriage's
 distance to the reference path's pieces within +-0.5 s of each tick, um). Not the distance to the
 whole path (nnik.job.servo_measure, the report's tables): a carriage that never moves sits on the
-path's start and would score 0 there.
+path's start and would score 0 there, and one that lags along the path is not seen. That distance
+is kept beside it (path_rms_um) for the report.
 
 A neural controller whose run diverged there (weight clamps over 1 % of its updates,
 nnik.job.servo_loop.learning_figures) is never the default. Ties go to the earlier kind in KINDS
@@ -16,21 +17,25 @@ nnik.job.servo_loop.learning_figures) is never the default. Ties go to the earli
 
 from __future__ import annotations
 
+import numpy as np
+
 
 def identified_scores(cfg, models, coulomb_v, controllers: dict, ref) -> dict[str, dict]:
-    """kind -> {"rms_um", "max_um", "diverged"} of each controller on ref (a nnik.job.reference
-    Reference) closed loop around the identified models."""
+    """kind -> {"rms_um", "max_um", "path_rms_um", "diverged"} of each controller on ref (a
+    nnik.job.reference Reference) closed loop around the identified models."""
     from nnik.implementations.servo.measure import score_run
     from nnik.implementations.servo.model_loop import simulate_model
     from nnik.job.servo_loop import learning_figures
+    from nnik.job.servo_measure import path_distance
 
     out = {}
     for kind, ctl in controllers.items():
         pos, duty = simulate_model(cfg, models, ctl, ref.counts, coulomb_v)
         s = score_run(cfg, ref.counts, pos, duty)
         learning = learning_figures(ctl)
+        path = path_distance(pos * cfg.um_per_count, ref.um)
         out[kind] = {"rms_um": s["rms_contour_um"], "max_um": s["max_contour_um"],
-                     "diverged": bool(learning and learning["diverged"])}
+                     "path_rms_um": float(np.sqrt(np.mean(path * path))), "diverged": bool(learning and learning["diverged"])}
     return out
 
 
@@ -39,7 +44,7 @@ def choose(asked: str, scores: dict[str, dict], ref_job: str) -> tuple[str, str]
     (asked "auto"), else the asked kind."""
     fit = {k: s for k, s in scores.items() if not s["diverged"]} or scores
     lowest = min(fit, key=lambda k: fit[k]["rms_um"])
-    where = f"RMS contour error on {ref_job} on the identified plant (model_loop)"
+    where = f"RMS contour error (tuning's: to the path within +-0.5 s) on {ref_job} on the identified plant"
     if asked != "auto":
         return asked, (f"[controller] kind = {asked!r}; the lowest {where} is {lowest}'s "
                        f"({scores[lowest]['rms_um']:.1f} um, {asked} {scores[asked]['rms_um']:.1f} um)")

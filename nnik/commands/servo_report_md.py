@@ -89,11 +89,13 @@ def write_report(out: Path, scn, fits, gains: dict, best: str, results: dict, ch
     lines += ["", "Tuned against the identified models (gains: `servo/gains.json`):", ""]
     lines += [_gains_line(k, g) for k, g in gains.items()]
     lines += _pretraining(nn["pretrain"])
-    lines += ["", f"Default controller: **{best}**: {nn['why']}. On the identified plant, RMS contour error: "
-              + ", ".join(f"{k} {s['rms_um']:.1f} um" + (" (diverged)" if s["diverged"] else "")
+    lines += ["", f"Default controller: **{best}**: {nn['why']}. On the identified plant (the speed models "
+              "and their Coulomb friction: what a real rig gives), RMS contour error as tuning measures it (to the "
+              "path's pieces within +-0.5 s of each tick: a lag along the path counts), and in brackets the "
+              "distance to the whole path (the tables' measure, blind to a lag): "
+              + ", ".join(f"{k} {s['rms_um']:.1f} um ({s['path_rms_um']:.1f})" + (" diverged" if s["diverged"] else "")
                           for k, s in nn["scores"].items())
-              + ". The identified plant is what a real rig gives; the tables below are on the scenario's true "
-              "plant.", "",
+              + ". The tables below are on the scenario's true plant.", "",
               "Overshoot, settling (the last time outside +-2 % of the step, at least 2 counts) and steady-state "
               "error are the worst over a test's steps; the contour error is the distance to the reference path; "
               "'at reversals' is the largest contour error within 0.25 s of a reference axis' reversal.", ""]

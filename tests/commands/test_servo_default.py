@@ -41,6 +41,7 @@ def test_scores_are_the_identified_plants(setup):
     c = identified_scores(cfg, fast, (0.0, 0.0), {"pid": make("pid", still, cfg)}, ref)["pid"]
     assert a["rms_um"] != b["rms_um"] and c["rms_um"] > a["rms_um"] > 0
     assert a["max_um"] >= a["rms_um"] and not a["diverged"]
+    assert c["path_rms_um"] == 0.0  # a still carriage sits on the path's start: the whole path's distance is blind
 
 
 def test_a_diverging_neural_run_is_flagged(setup):
@@ -65,7 +66,8 @@ def test_choose_picks_the_lowest_that_did_not_diverge(scores):
     fit = [k for k, s in scores.items() if not s["diverged"]] or list(scores)
     low = min(scores[k]["rms_um"] for k in fit)
     assert best == next(k for k in fit if scores[k]["rms_um"] == low)  # ties: the earlier kind
-    assert why.startswith("the lowest RMS contour error on ref.gcode on the identified plant")
+    assert why.startswith("the lowest RMS contour error (tuning's: to the path within +-0.5 s) on ref.gcode on the "
+                          "identified plant")
     assert all(k in why for k, s in scores.items() if s["diverged"] and fit != list(scores))
 
 

@@ -43,7 +43,8 @@ def test_nnik_run_identifies_tunes_runs_the_seeds_tests_and_names_the_default(xy
     stored = gains["default"]["identified_plant"]
     assert set(stored) == set(KINDS) and len(gains["default"]["coulomb_v"]) == 2
     assert gains["chosen"] == min((k for k in KINDS if not stored[k]["diverged"]), key=lambda k: stored[k]["rms_um"])
-    assert f"default controller: {gains['chosen']} (the lowest RMS contour error on {ref} on the identified plant" \
+    assert (f"default controller: {gains['chosen']} (the lowest RMS contour error (tuning's: to the path within "
+            f"+-0.5 s) on {ref} on the identified plant") \
         in " ".join(r.stdout.split())
     assert f"Default controller: **{gains['chosen']}**" in (out / "report" / "closed_loop.md").read_text()
     logs = json.loads((out / "servo" / "pretrain.json").read_text())
