@@ -14,8 +14,8 @@ import os
 from pathlib import Path
 
 from nnik.files.atomic_write import write_file_atomic
+from nnik.job.servo_compare import DIVERGED_PID_FACTOR  # a contour error past 10x the tuned PID's: diverged
 
-DIVERGED_PID_FACTOR = 10.0  # issue 29: a contour error past 10x the tuned PID's on the same job is diverged
 HEADER = ("controller", "contour max um", "contour RMS um", "at reversals um", "overshoot um", "settling s",
           "steady-state um", "saturated %", "clamps / updates")
 

@@ -38,10 +38,10 @@ import numpy as np
 from nnik.errors import NnikError
 from nnik.files.atomic_write import write_file_atomic
 from nnik.implementations.servo import BASELINES, NEURAL, make
+from nnik.job.servo_loop import DIVERGED_CLAMP_FRACTION as DIVERGED_CLAMP_SHARE  # clamps > 1 % of updates
 
 PLANTS = ("nominal", "drift", "differing")
 METRICS = (("contour_rms_um", "rms_um"), ("tracking_rms_um", "tracking_um"), ("steady_state_um", "steady_um"))
-DIVERGED_CLAMP_SHARE = 0.01
 DIVERGED_PID_FACTOR = 10.0
 
 
