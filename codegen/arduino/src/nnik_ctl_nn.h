@@ -12,7 +12,7 @@
  *   w2_j += rnd(rnd(d, ETA & 7) h_j, 8 (ETA >> 3));  w1_ji += rnd(rnd(dh_j, S & 7) x_i, 8 (S >> 3)), S = ETA + 3
  *   (rnd(v, s) = (v + 2^s / 2) >> s): the learning rate's bits on the int16 delta, its whole bytes on
  *   the product (byte moves on the AVR); each master word clamped (+-2^29, +-2^30)
- *   the rows of half the hidden units per tick when NNIK_NN_W1_EVERY is 2 (alternating by the tick's parity)
+ *   first-layer rows: those of units j = k mod NNIK_NN_W1_EVERY on tick k since the reset (8 / EVERY a tick)
  *   skipped when the previous output sat at +-NNIK_DUTY_MAX and d pushes it further (anti-windup)
  * Every product is int16 x int16 -> int32.  nnik_ctl_sum: the master words' low halves summed mod 2^16
  * (kept up to date by each update's change).
@@ -43,11 +43,12 @@
 #define NNIK_NN_W1_LIM (1L << 30)
 #define NNIK_NN_W2_LIM (1L << 29)
 
-/* a raw integer input into Q3.12 by 2^s (s a constant, -12 .. 12), saturated to +-32767 */
+/* a raw integer input into Q3.12 by 2^s (s a constant, -12 .. 12), saturated to +-32767 (the
+ * product of the saturated value and 2^s fits 16 bits: a 16-bit shift) */
 #define NNIK_NN_POS(s) ((s) >= 0 ? (s) : 0)
-#define NNIK_NN_SCALE(raw, s)                                                                        \
-    ((s) >= 0 ? (int16_t)(nnik_ctl_sat((raw), 32767L >> NNIK_NN_POS(s)) * (1L << NNIK_NN_POS(s))) \
-              : nnik_ctl_s16((raw) >> NNIK_NN_POS(-(s))))
+#define NNIK_NN_SCALE(raw, s)                                                                                  \
+    ((s) >= 0 ? (int16_t)((int16_t)nnik_ctl_sat((raw), 32767L >> NNIK_NN_POS(s)) * (int16_t)(1 << NNIK_NN_POS(s))) \
+              : nnik_ctl_s16(nnik_nn_asr((raw), NNIK_NN_POS(-(s)))))
 
 typedef struct {
     int32_t w1[NNIK_NN_HID][NNIK_NN_IN];
@@ -236,7 +237,7 @@ static uint16_t nnik_nn_load(nnik_nn_t *n, uint8_t k)
 
 /* One tick of one net: when the net is primed (a cached forward pass) and the anti-windup allows,
  * the weights learn from the cache (inputs n->x, outputs n->h) and delta_out d: every output weight,
- * and the first-layer rows of the units j with ((j ^ phase) & (NNIK_NN_W1_EVERY - 1)) == 0; then
+ * and the first-layer rows of the units j with j mod NNIK_NN_W1_EVERY == phase; then
  * the forward pass with the new inputs x.
  * Returns the Q8 duty accumulator; *sum follows the master words' low halves. */
 #if defined(__GNUC__)
@@ -255,7 +256,7 @@ static int32_t nnik_nn_step(nnik_nn_t *n, const int16_t x[NNIK_NN_IN], int16_t d
             int16_t h = n->h[j];
             int32_t w2 = n->w2[j];
             n->w2[j] = nnik_nn_update(w2, d2, h, NNIK_NN_S2, NNIK_NN_W2_LIM);
-            if (((j ^ phase) & (NNIK_NN_W1_EVERY - 1)) == 0) {
+            if ((j & (NNIK_NN_W1_EVERY - 1)) == phase) {
                 int16_t g = (int16_t)(32767 - nnik_nn_shr15(nnik_nn_mac(0, h, h)));
                 int16_t t = nnik_ctl_s16(nnik_nn_asr(nnik_nn_mac(0, d, (int16_t)(w2 >> 16)), 12));
                 int16_t dh = nnik_nn_rnd16(nnik_nn_shr15(nnik_nn_mac(0, t, g)), NNIK_NN_S1 & 7);

@@ -58,7 +58,7 @@ void nnik_ctl_tick(const int32_t ref[2], const int32_t pos[2], int16_t duty[2])
     }
     nnik_nna_idx = (uint8_t)((nnik_nna_idx + 1) & (NNIK_CTL_WIN - 1));
     nnik_nna_primed = 1;
-    nnik_nna_phase ^= 1;
+    nnik_nna_phase = (uint8_t)((nnik_nna_phase + 1) & (NNIK_NN_W1_EVERY - 1));
 }
 #else
 typedef int nnik_ctl_nn_axes_unused; /* not this build's controller */

@@ -26,7 +26,7 @@ class NeuralController:
         for n in self.nets:
             n.reset()
         self.counts = {"updates": 0, "clamps": 0, "held": 0}
-        self.phase = 0  # the tick's parity since the reset (which hidden rows learn, params.py w1_every)
+        self.phase = 0  # ticks since the reset mod w1_every: which hidden rows learn (params.py)
         self._reset_state()
 
     def _reset_state(self) -> None:
