@@ -12,18 +12,18 @@
 #ifdef NNIK_CTL_NN_VECTOR
 #include "nnik_ctl_nn.h"
 
-uint16_t nnik_ctl_sum; /* the weights' checksum after the last tick (or reset) */
+uint16_t nnik_ctl_sum = NNIK_NN_SUM_INIT; /* the weights' checksum after the last tick (or reset) */
 
-static nnik_nn_t nnik_nnv_net;
+static nnik_nn_t nnik_nnv_net = {nnik_nn_w1, nnik_nn_w2, {0}, {0}, 0, 0};
 static int32_t nnik_nnv_m1, nnik_nnv_m2;
-static uint8_t nnik_nnv_primed, nnik_nnv_loaded, nnik_nnv_phase;
+static uint8_t nnik_nnv_primed, nnik_nnv_phase;
 
 void nnik_ctl_reset(void)
 {
-    nnik_ctl_sum = nnik_nn_load(&nnik_nnv_net, 0);
+    nnik_nn_load(&nnik_nnv_net);
+    nnik_ctl_sum = NNIK_NN_SUM_INIT;
     nnik_nnv_primed = 0;
     nnik_nnv_phase = 0;
-    nnik_nnv_loaded = 1;
 }
 
 static int16_t nnik_nnv_split(int16_t u, int16_t e, int32_t inv, int16_t c)
@@ -38,8 +38,6 @@ void nnik_ctl_tick(const int32_t ref[2], const int32_t pos[2], int16_t duty[2])
     int16_t ex = nnik_ctl_s16(ref[0] - pos[0]), ey = nnik_ctl_s16(ref[1] - pos[1]), x[NNIK_NN_IN];
     int16_t rx = nnik_ctl_s16(ref[0] >> NNIK_NN_R_SHIFT), ry = nnik_ctl_s16(ref[1] >> NNIK_NN_R_SHIFT), lo;
     int32_t m, m1, m2, r;
-    if (!nnik_nnv_loaded) /* zeroed statics at power-on: start from the initial weights */
-        nnik_ctl_reset();
     m = (int32_t)nnik_isqrt32((uint32_t)nnik_nn_mac(0, ex, ex) + (uint32_t)nnik_nn_mac(0, ey, ey));
     rx = rx < 0 ? (int16_t)-rx : rx; /* |R|: max + 3/8 min (s16 saturates at -32767: no overflow) */
     ry = ry < 0 ? (int16_t)-ry : ry;
