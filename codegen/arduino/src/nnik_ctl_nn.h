@@ -226,17 +226,25 @@ NNIK_NN_INLINE void nnik_nn_clamp_all(int32_t *w, uint8_t n, int32_t lim)
 #else
 #define NNIK_NN_ADD_W2 NNIK_NN_ADD_3
 #endif
-/* z: zero during the product, then the sign byte, then the flag's scratch */
-#define NNIK_NN_UPD_STEP(ADD)                                                                        \
-    "clr %[z]\n\tclr %A[acc]\n\tclr %B[acc]\n\tclr %C[acc]\n\tclr %D[acc]\n\tld %A[x], X+\n\tld %B[x], X+\n\t"  \
+/* acc = A * B (int16 x int16 -> int32, signed): AVR201's muls16x16_32 (no accumulator to clear);
+ * z must be zero; clobbers r0, r1 (the caller clears __zero_reg__) */
+#define NNIK_NN_MUL_ASM(A, B)                                                                          \
+    "muls %B[" A "], %B[" B "]\n\tmovw %C[acc], r0\n\tmul %A[" A "], %A[" B "]\n\tmovw %A[acc], r0\n\t"      \
+    "mulsu %B[" A "], %A[" B "]\n\tsbc %D[acc], %[z]\n\tadd %B[acc], r0\n\tadc %C[acc], r1\n\tadc %D[acc], %[z]\n\t" \
+    "mulsu %B[" B "], %A[" A "]\n\tsbc %D[acc], %[z]\n\tadd %B[acc], r0\n\tadc %C[acc], r1\n\tadc %D[acc], %[z]\n\t"
+/* one master word at Z: += rnd(A * (the int16 at X+, into X), 8 q) by ADD; z: zero during the
+ * product, then the sign byte, then the flag's scratch */
+#define NNIK_NN_UPD_STEP_AX(ADD, A, X)                                                               \
+    "clr %[z]\n\tld %A[" X "], X+\n\tld %B[" X "], X+\n\t" NNIK_NN_MUL_ASM(A, X)                        \
     "ldd %A[v], Z+0\n\tldd %B[v], Z+1\n\tldd %C[v], Z+2\n\tldd %D[v], Z+3\n\t"                          \
-    NNIK_NN_MAC_ASM("a", "x") "clr __zero_reg__\n\tsbrc %D[acc], 7\n\tcom %[z]\n\t" ADD                   \
+    "sbrc %D[acc], 7\n\tcom %[z]\n\t" ADD                                                              \
     "std Z+0, %A[v]\n\tstd Z+1, %B[v]\n\tstd Z+2, %C[v]\n\tstd Z+3, %D[v]\n\tadiw r30, 4\n\t"            \
     "mov %[z], %D[v]\n\tlsl %[z]\n\teor %[z], %D[v]\n\tor %[f], %[z]\n\t"
+#define NNIK_NN_UPD_STEP(ADD) NNIK_NN_UPD_STEP_AX(ADD, "a", "x")
 #define NNIK_NN_UPD_OPERANDS                                                                         \
     : [acc] "=&r"(acc), [v] "=&r"(v), [x] "=&a"(xv), [z] "=&r"(z), [f] "=&r"(flag), "+z"(wp), "+x"(x) \
     : [a] "a"(a)                                                                                     \
-    : "memory"
+    : "memory", "r0"
 #define NNIK_NN_UPD_LOCALS                                                                           \
     int32_t *wp = w, acc, v;                                                                         \
     int16_t xv;                                                                                      \
@@ -246,7 +254,41 @@ NNIK_NN_INLINE void nnik_nn_row(int32_t *w, int16_t a, const int16_t *x)
 {
     NNIK_NN_UPD_LOCALS;
     __asm__("clr %[f]\n\t" NNIK_NN_UPD_STEP(NNIK_NN_ADD_W1) NNIK_NN_UPD_STEP(NNIK_NN_ADD_W1)
-                NNIK_NN_UPD_STEP(NNIK_NN_ADD_W1) NNIK_NN_UPD_STEP(NNIK_NN_ADD_W1) NNIK_NN_UPD_OPERANDS);
+                NNIK_NN_UPD_STEP(NNIK_NN_ADD_W1) NNIK_NN_UPD_STEP(NNIK_NN_ADD_W1) "clr __zero_reg__"
+                NNIK_NN_UPD_OPERANDS);
+    if (flag & 0x80)
+        nnik_nn_clamp_all(w, NNIK_NN_IN, NNIK_NN_W1_LIM);
+}
+
+/* One hidden unit's learning on the AVR in one inline block: its delta from its cached output h,
+ * its output weight's top half w2 and delta_out d (as the C of nnik_nn_delta), then its 4 first-layer
+ * words (nnik_nn_row).  g = 32767 - (h h >> 15) is 0x7FFF XOR (h h >> 15); t = sat16(d w2 >> 12) from
+ * the product's top 3 bytes shifted 4 bits (it fits when the top byte is the sign of the next);
+ * dh = (t g >> 15) shifted right S1 & 7 bits, the last bit out (carry) added: rounding half up. */
+NNIK_NN_INLINE void nnik_nn_unit(int32_t *w, int16_t h, int16_t w2, int16_t d, const int16_t *x)
+{
+    int32_t *wp = w, acc, v;
+    uint8_t flag, z;
+    __asm__("clr %[z]\n\t" NNIK_NN_MUL_ASM("h", "h")
+            "lsl %B[acc]\n\trol %C[acc]\n\trol %D[acc]\n\t"
+            "mov %A[h], %C[acc]\n\tcom %A[h]\n\tmov %B[h], %D[acc]\n\tcom %B[h]\n\tsubi %B[h], 0x80\n\t"
+            NNIK_NN_MUL_ASM("d", "w")
+            ".rept 4\n\tasr %D[acc]\n\tror %C[acc]\n\tror %B[acc]\n\t.endr\n\t"
+            "mov %[f], %C[acc]\n\tlsl %[f]\n\tsbc %[f], %[f]\n\tcp %[f], %D[acc]\n\tbrne 2f\n\t"
+            "mov %A[w], %B[acc]\n\tmov %B[w], %C[acc]\n\tcpi %A[w], 0\n\tbrne 3f\n\tcpi %B[w], 0x80\n\tbrne 3f\n\t"
+            "ldi %A[w], 1\n\trjmp 3f\n"
+            "2:\n\tldi %A[w], 0xFF\n\tldi %B[w], 0x7F\n\tsbrs %D[acc], 7\n\trjmp 3f\n\tldi %A[w], 0x01\n\tldi %B[w], 0x80\n"
+            "3:\n\t" NNIK_NN_MUL_ASM("w", "h")
+            "lsl %B[acc]\n\trol %C[acc]\n\trol %D[acc]\n\t"
+            ".if %[r]\n\t.rept %[r]\n\tasr %D[acc]\n\tror %C[acc]\n\t.endr\n\tadc %C[acc], %[z]\n\tadc %D[acc], %[z]\n\t.endif\n\t"
+            "mov %A[h], %C[acc]\n\tmov %B[h], %D[acc]\n\tclr %[f]\n\t"
+            NNIK_NN_UPD_STEP_AX(NNIK_NN_ADD_W1, "h", "d") NNIK_NN_UPD_STEP_AX(NNIK_NN_ADD_W1, "h", "d")
+            NNIK_NN_UPD_STEP_AX(NNIK_NN_ADD_W1, "h", "d") NNIK_NN_UPD_STEP_AX(NNIK_NN_ADD_W1, "h", "d")
+            "clr __zero_reg__"
+            : [acc] "=&r"(acc), [v] "=&r"(v), [z] "=&r"(z), [f] "=&r"(flag), "+z"(wp), "+x"(x), [h] "+a"(h),
+              [w] "+a"(w2), [d] "+a"(d)
+            : [r] "n"(NNIK_NN_S1 & 7)
+            : "memory", "r0");
     if (flag & 0x80)
         nnik_nn_clamp_all(w, NNIK_NN_IN, NNIK_NN_W1_LIM);
 }
@@ -257,7 +299,7 @@ NNIK_NN_INLINE void nnik_nn_out(int32_t *w, int16_t a, const int16_t *x)
     __asm__("clr %[f]\n\t" NNIK_NN_UPD_STEP(NNIK_NN_ADD_W2) NNIK_NN_UPD_STEP(NNIK_NN_ADD_W2)
                 NNIK_NN_UPD_STEP(NNIK_NN_ADD_W2) NNIK_NN_UPD_STEP(NNIK_NN_ADD_W2) NNIK_NN_UPD_STEP(NNIK_NN_ADD_W2)
                     NNIK_NN_UPD_STEP(NNIK_NN_ADD_W2) NNIK_NN_UPD_STEP(NNIK_NN_ADD_W2) NNIK_NN_UPD_STEP(NNIK_NN_ADD_W2)
-                        NNIK_NN_UPD_OPERANDS);
+                        "clr __zero_reg__" NNIK_NN_UPD_OPERANDS);
     if (flag & 0xC0)
         nnik_nn_clamp_all(w, NNIK_NN_HID, NNIK_NN_W2_LIM);
 }
@@ -267,6 +309,13 @@ NNIK_NN_INLINE void nnik_nn_row(int32_t *w, int16_t a, const int16_t *x)
     uint8_t i;
     for (i = 0; i < NNIK_NN_IN; i++)
         w[i] = nnik_nn_update(w[i], a, x[i], NNIK_NN_S1, NNIK_NN_W1_LIM);
+}
+
+NNIK_NN_INLINE void nnik_nn_unit(int32_t *w, int16_t h, int16_t w2, int16_t d, const int16_t *x)
+{
+    int16_t g = (int16_t)(32767 - nnik_nn_shr15(nnik_nn_mac(0, h, h)));
+    int16_t t = nnik_nn_sat12(nnik_nn_mac(0, d, w2));
+    nnik_nn_row(w, nnik_nn_rnd16(nnik_nn_shr15(nnik_nn_mac(0, t, g)), NNIK_NN_S1 & 7), x);
 }
 
 NNIK_NN_INLINE void nnik_nn_out(int32_t *w, int16_t a, const int16_t *x)
@@ -291,6 +340,15 @@ static void nnik_nn_load(nnik_nn_t *nets)
     }
 }
 
+/* the first-layer rows of the units j = phase, phase + NNIK_NN_W1_EVERY, ... learn (delta_out d);
+ * a function of its own: the unit's inline block needs most of the registers */
+NNIK_NN_OWN_REGS void nnik_nn_units(nnik_nn_t *n, int16_t d, uint8_t phase)
+{
+    uint8_t j;
+    for (j = phase; j < NNIK_NN_HID; j += NNIK_NN_W1_EVERY)
+        nnik_nn_unit(n->w1 + j * NNIK_NN_IN, n->h[j], (int16_t)(n->w2[j] >> 16), d, n->x);
+}
+
 /* One tick of one net: when the net is primed (a cached forward pass) and the anti-windup allows,
  * the weights learn from the cache (inputs n->x, outputs n->h) and delta_out d: every output weight,
  * and the first-layer rows of the units j with j mod NNIK_NN_W1_EVERY == phase; then
@@ -307,13 +365,7 @@ static int32_t nnik_nn_step(nnik_nn_t *n, const int16_t x[NNIK_NN_IN], int16_t d
     uint16_t s = 0;
     if (n->primed && !((n->u >= NNIK_DUTY_MAX && d > 0) || (n->u <= -NNIK_DUTY_MAX && d < 0))) {
         int16_t d2 = nnik_nn_rnd16(d, NNIK_NN_S2 & 7);
-        for (j = phase; j < NNIK_NN_HID; j += NNIK_NN_W1_EVERY) {
-            int16_t h = n->h[j];
-            int16_t g = (int16_t)(32767 - nnik_nn_shr15(nnik_nn_mac(0, h, h)));
-            int16_t t = nnik_nn_sat12(nnik_nn_mac(0, d, (int16_t)(n->w2[j] >> 16)));
-            int16_t dh = nnik_nn_rnd16(nnik_nn_shr15(nnik_nn_mac(0, t, g)), NNIK_NN_S1 & 7);
-            nnik_nn_row(n->w1 + j * NNIK_NN_IN, dh, n->x);
-        }
+        nnik_nn_units(n, d, phase);
         nnik_nn_out(n->w2, d2, n->h); /* after the rows: delta_h used the forward pass' w2 */
     }
     w = n->w1;
