@@ -9,7 +9,7 @@
  *   FEED, COUNT, POS  the SRAM addresses of nnik_servo_feed, nnik_servo_count, nnik_servo_pos
  *   X0, Y0    the start counts (the encoder pins start in their phase; the counts are written
  *             once the firmware's set-up sleeps, before the first tick)
- *   SUM       the SRAM address of nnik_ctl_sum (uint16: a learning controller's weight checksum);
+ *   SUM       the SRAM address of nnik_servo_sum (uint16: a learning controller's weight checksum);
  *             0 or absent: none (a controller that does not learn; its answer is 0)
  *   FEED 0: a firmware with its own reference (an exported sketch playing its stored job, which
  *             sets its start counts itself): no reference is written, the references sent are
@@ -25,7 +25,7 @@
  *   interrupts nested in it), the tick interrupt's cycles (entry to return, less nested ones),
  *   the encoder interrupts' cycles and their number since the last answer, the awake cycles since
  *   the last answer (the main loop sleeps, so these are all interrupt work), the longest encoder
- *   interrupt, the chip's encoder counts x, y now, the weight checksum nnik_ctl_sum (0 without SUM).
+ *   interrupt, the chip's encoder counts x, y now, the weight checksum nnik_servo_sum (0 without SUM).
  * UART: with NNIK_SERVO_UART=PATH in the environment, every byte the chip sends on UART0 is
  *   appended to PATH as it leaves the simulated transmitter (simavr paces it at the baud rate).
  * An interrupt's cycles run from the cycle its vector is taken (simavr's instruction boundary,

@@ -7,7 +7,7 @@
 
 #include "nnik_ctl.h"
 
-extern volatile uint16_t nnik_ctl_sum __attribute__((weak));
+extern uint16_t nnik_ctl_sum __attribute__((weak));
 
 int main(void)
 {

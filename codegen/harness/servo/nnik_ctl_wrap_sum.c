@@ -2,7 +2,7 @@
  * ones): the harness's call also answers nnik_ctl_sum after the tick (out = duty x, y, sum). */
 #include "nnik_ctl.h"
 
-extern volatile uint16_t nnik_ctl_sum;
+extern uint16_t nnik_ctl_sum;
 
 int8_t nnik_ctl_ik(const int32_t in[4], int32_t out[3])
 {

@@ -27,9 +27,10 @@ RUNTIME_HEADERS = ("nnik_servo.h",)
 FEED = HARNESS_DIR / "arduino" / "nnik_servo_feed.c"
 HARNESS_SRC = HARNESS_DIR / "arduino" / "nnik_simavr_servo.c"
 SYMBOLS = ("nnik_servo_feed", "nnik_servo_count", "nnik_servo_pos")
-# a learning controller's weight checksum (nnik_servo.c sets it each tick when the controller learns;
-# without one the linker drops it): address 0 when absent, which the harness answers as checksum 0
-OPTIONAL_SYMBOLS = ("nnik_ctl_sum",)
+# a learning controller's weight checksum (nnik_servo.c publishes its nnik_ctl_sum each tick; with a
+# fixed-gain controller it is never written and a linker may drop it): address 0 when absent, which
+# the harness answers as checksum 0
+OPTIONAL_SYMBOLS = ("nnik_servo_sum",)
 
 
 @dataclass(frozen=True)

@@ -1,7 +1,7 @@
 """The closed-loop co-simulation: the servo firmware on the simulated Uno (nnik_simavr_servo, in
 lockstep over a pipe) drives the Python plant, and the controller's integer Python model, fed the
 same reference and the counts the chip latched, predicts every duty (chip = model, tick by tick)
-and, for a learning controller, its weights: the chip's weight checksum (nnik_ctl_sum, the sum of
+and, for a learning controller, its weights: the chip's weight checksum (nnik_servo_sum, the sum of
 every int32 master word modulo 2^16 after the tick) against the model's checksum() (0 for the
 fixed-gain controllers, whose chip reports 0). A tick mismatches when a duty or the checksum differs.
 
@@ -86,7 +86,7 @@ class ChipSession:
         self._err = open(Path(workdir) / "servo_harness.stderr", "w+")
         cmd = [str(exe), str(fw.elf), str(fw.period_cycles), str(substeps), str(s["nnik_servo_feed"]),
                str(s["nnik_servo_count"]), str(s["nnik_servo_pos"]), *(str(int(c)) for c in start_counts),
-               str(s.get("nnik_ctl_sum", 0))]
+               str(s.get("nnik_servo_sum", 0))]
         try:
             env = None if uart_log is None else dict(os.environ, NNIK_SERVO_UART=str(uart_log))
             self.proc = subprocess.Popen(cmd, stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=self._err, env=env)

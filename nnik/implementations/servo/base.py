@@ -3,7 +3,7 @@
 A controller is duck-typed: `kind`, `reset()`, `tick(ref, pos) -> (duty_x, duty_y)`,
 `c_defines()` (the gains and formats as C macros for the generated nnik_servo_config.h) and
 `checksum()` (the sum of its weights' int32 master words modulo 2^16 after the last tick, which the
-chip reports as nnik_ctl_sum; 0 for the fixed-gain controllers, FixedGains). Each tick
+chip reports as nnik_ctl_sum, published by the runtime as nnik_servo_sum; 0 for the fixed-gain controllers, FixedGains). Each tick
 it sees the reference and the encoder counts (int32 counts per axis) and returns the duty the plant
 holds until the next tick. Its integer arithmetic is the specification of the C in
 codegen/arduino/src/nnik_ctl_<kind>.c, which matches it bit for bit.
@@ -37,7 +37,7 @@ class ServoController(Protocol):
 
 class FixedGains:
     """A controller that does not learn (pid, pdff, ccc): no weights, checksum 0, as its chip's
-    nnik_ctl_sum (never set) reads."""
+    nnik_servo_sum (never set) reads."""
 
     def checksum(self) -> int:
         return 0

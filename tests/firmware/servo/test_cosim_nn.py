@@ -1,5 +1,5 @@
 """The neural controllers on the simulated Uno in closed loop (issue 29 item 4): chip = integer model
-at every tick for the duties AND the weights' checksum (nnik_ctl_sum against checksum()), on random
+at every tick for the duties AND the weights' checksum (the runtime's nnik_servo_sum against checksum()), on random
 params (weights anywhere up to their clamps, any learning rate) and random references; a model that
 differs from the chip in one weight's lowest bit, invisible in every duty, is caught by the checksum
 alone."""
@@ -31,7 +31,7 @@ def test_chip_duties_and_weights_equal_the_model(kind, data, tmp_path_factory):
     root = tmp_path_factory.mktemp(kind)
     ctl = make(kind, params, cfg)
     fw = build_firmware(ctl, cfg.tick_s, root)
-    assert fw.symbols["nnik_ctl_sum"] > 0
+    assert fw.symbols["nnik_servo_sum"] > 0
     tr = run(fw, cfg, ctl, ref, root / "run", start_counts=tuple(int(c) for c in ref[0]))
     bad = tr.mismatch_ticks
     assert tr.mismatches == 0, (f"tick {bad[0]}: chip {tr.chip_duty[bad[0]]} sum {tr.chip_sum[bad[0]]}, model "

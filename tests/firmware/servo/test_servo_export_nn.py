@@ -77,7 +77,7 @@ def test_the_exported_sketch_learns_as_the_model(kind, tmp_path):
     config = (lib / "src" / "nnik_servo_config.h").read_text()
     assert f"NNIK_CTL_{kind.upper()} 1" in config and "NNIK_NN_W1_INIT" in config
     fw = sketch_firmware(build(lib), cfg.tick_s)
-    assert fw.symbols["nnik_ctl_sum"] > 0  # kept by the sketch's link-time optimisation
+    assert fw.symbols["nnik_servo_sum"] > 0  # kept by the sketch's link-time optimisation
     played = unpack(pack(ref, start), start, len(ref) + 5)
     tr = run(fw, cfg, make(kind, params, cfg), played, tmp_path / "run", start_counts=start)
     assert tr.mismatches == 0 and tr.lost_counts == 0

@@ -21,7 +21,7 @@ from tests.implementations.servo.sequences import CFG
 def test_every_learning_rate_builds_for_the_avr(kind, tmp_path):
     require_tool("avr-gcc")
     for eta in range(f.ETA_MAX + 1):
-        p = {**seeded_nn_params(kind, eta, CFG, eta_shift=eta), "w1_every": 1 + eta % 2,
+        p = {**seeded_nn_params(kind, eta, CFG, eta_shift=eta), "w1_every": (1, 2, 4, 8)[eta % 4],
              "in_shift": [eta % 25 - 12, 0, 12, -(eta % 13)]}
         d = tmp_path / f"eta{eta}"
         src = [s for s in write_controller_c(make(kind, p, CFG), d) if s.name == f"nnik_ctl_{kind}.c"][0]

@@ -26,7 +26,7 @@ class NeuralController:
         for n in self.nets:
             n.reset()
         self.counts = {"updates": 0, "clamps": 0, "held": 0}
-        self.phase = 0  # the tick's parity since the reset (which hidden rows learn, params.py w1_every)
+        self.phase = 0  # ticks since the reset mod w1_every: which hidden rows learn (params.py)
         self._reset_state()
 
     def _reset_state(self) -> None:
@@ -53,6 +53,11 @@ class NeuralController:
     def checksum(self) -> int:
         return sum(n.checksum() for n in self.nets) & 0xFFFF
 
+    def _initial_sum(self) -> int:
+        """The checksum of the initial weights (the chip's nnik_ctl_sum at power-on and after a reset)."""
+        words = [w for net in self.p["w1"] for row in net for w in row] + [w for net in self.p["w2"] for w in net]
+        return sum(w & 0xFFFF for w in words) & 0xFFFF
+
     def weight_norm(self) -> float:
         return math.sqrt(sum(n.squares() for n in self.nets))
 
@@ -64,7 +69,7 @@ class NeuralController:
         d = {f"NNIK_CTL_{self.kind.upper()}": 1, "NNIK_DUTY_MAX": self.duty_max, "NNIK_NN_NETS": len(self.nets),
              "NNIK_NN_ETA": self.p["eta_shift"], "NNIK_NN_OUT_SHIFT": self.out_shift,
              "NNIK_NN_JX": self.p["jacobian"][0], "NNIK_NN_JY": self.p["jacobian"][1],
-             "NNIK_NN_W1_EVERY": self.p["w1_every"]}
+             "NNIK_NN_W1_EVERY": self.p["w1_every"], "NNIK_NN_SUM_INIT": self._initial_sum()}
         for i, s in enumerate(self.p["in_shift"]):
             d[f"NNIK_NN_IN_SHIFT_{i}"] = s
         return d

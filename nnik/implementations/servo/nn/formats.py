@@ -27,7 +27,18 @@ float, no int64, no 32 x 32 product except the vector split's unit vector (nn_ve
            a constant costs 6 cycles a bit there). |p| < 2^30, so master + dW < 2^31 before the
            clamp. eta = eta_shift, 0 .. 27.
 
+Which weights learn on a tick: all 8 output weights, and the first-layer rows of the hidden units
+j = k mod w1_every (params.py); a tick whose previous output sat at +-duty_max with d pushing it
+further learns nothing (anti-windup, counted as held). A master word beyond its clamp is set to it
+and counted (clamps); updates counts the words updated.
+
 The weights' checksum is the sum of every master word's low 16 bits, mod 2^16 (uint16).
+
+The activation is tanh_int's default variant lerp_mr4 (a 4-region table of 129 Q15 nodes with
+linear interpolation: 1 multiply, 258 bytes, max 1.8 LSB): of the registered variants it is among
+the cheapest on the AVR (measured in this session on simavr, per call with the harness's
+overhead: lerp_mr4 259 cycles, lerp64 249, lerp_mr 254, lerp32 316, minimax2_x22 508, paper_lsq5
+1719) and the smallest table of the fast ones.
 """
 
 from __future__ import annotations

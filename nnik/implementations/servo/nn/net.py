@@ -44,9 +44,8 @@ class Net:
 
     def learn(self, d: int, eta: int, duty_max: int, counts: dict, phase: int = 0, every: int = 1) -> None:
         """Backward with the cached forward pass and delta_out d (Q3.12): the output layer's 8
-        weights, and the first-layer rows of the hidden units j with (j ^ phase) & (every - 1) == 0
-        (every 1: all; 2: the even units on phase 0, the odd on phase 1). counts gains updates (weights
-        updated), clamps and held."""
+        weights, and the first-layer rows of the hidden units j with j mod every == phase (phase in
+        0 .. every - 1; every 1: all rows). counts gains updates (weights updated), clamps and held."""
         if self.x is None:
             return
         if (self.u >= duty_max and d > 0) or (self.u <= -duty_max and d < 0):
@@ -58,7 +57,7 @@ class Net:
         for j in range(f.N_HID):
             hj, w2 = self.h[j], self.w2[j]  # delta_h uses the output weight of the forward pass
             self.w2[j] = self._clamp(w2 + f.rnd(d2 * hj, eta & ~7), f.W2_LIM, counts)
-            if (j ^ phase) & (every - 1):
+            if (j & (every - 1)) != phase:
                 continue
             g = f.I16 - ((hj * hj) >> 15)
             t = f.sat((d * (w2 >> 16)) >> 12, f.I16)

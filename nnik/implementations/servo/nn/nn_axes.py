@@ -45,7 +45,7 @@ class NnAxes(NeuralController):
             net.u = fx.duty_out(net.forward(x, self.out_shift), self.duty_max)
             out.append(net.u)
         self.e2, self.e1 = e1, e
-        self.phase ^= 1
+        self.phase = (self.phase + 1) & (self.p["w1_every"] - 1)
         return out[0], out[1]
 
     def c_defines(self) -> dict[str, int]:
