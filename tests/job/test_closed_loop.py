@@ -156,14 +156,24 @@ def test_nnik_export_writes_the_servo_library_with_the_stored_circle(xy_run, tmp
 @pytest.mark.parametrize("kind", ("nn_axes", "nn_vector"))
 def test_nnik_export_a_neural_controller_builds_with_arduino_mk(xy_run, tmp_path, kind):
     """`nnik export OUTDIR --arduino DIR --controller nn_*`: the library runs the controller from its
-    pretrained weights (the run's params in its config header) and the seed's circle fits the Uno."""
+    pretrained weights (the run's params in its config header), builds and fits the Uno; the seed's
+    125 s circle (about 23.6 kB stored) is too long beside a learning controller: one line, nothing
+    written."""
     import shutil
 
     from nnik.targets.avr import elf_sizes
 
     out, _ = xy_run
-    r = nnik("export", out, "--arduino", tmp_path / "lib", "--controller", kind)
-    assert r.returncode == 0 and f"example xy_table_servo: {kind}, job servo_circle.gcode" in r.stdout, r.stderr
+    from nnik.firmware.servo.export import JOB_FLASH_BYTES_LEARNING
+
+    r = nnik("export", out, "--arduino", tmp_path / "circle", "--controller", kind)
+    if r.returncode:  # the circle does not fit beside the network
+        assert r.returncode == 2 and r.stderr.count("\n") == 1 and "do not fit" in r.stderr, r.stderr
+        assert f"{JOB_FLASH_BYTES_LEARNING:,} B for the job beside the {kind} controller" in r.stderr
+        assert not (tmp_path / "circle").exists()
+    r = nnik("export", out, "--arduino", tmp_path / "lib", "--controller", kind, "--job",
+             JOBS / "xy_table_reference.gcode")
+    assert r.returncode == 0 and f"example xy_table_servo: {kind}, job xy_table_reference.gcode" in r.stdout, r.stderr
     w1 = json.loads((out / "servo" / "gains.json").read_text())["gains"][kind]["w1"]
     config = (tmp_path / "lib" / "src" / "nnik_servo_config.h").read_text()
     assert f"NNIK_CTL_{kind.upper()} 1" in config and f"{w1[0][0][0]}L" in config
