@@ -9,6 +9,7 @@ from nnik import pipeline
 from nnik.errors import NnikError
 from nnik.commands import common_options as co
 from nnik.commands.model_dirs import add_model_dir, evaluated_dir
+from nnik.job.servo_dir import KINDS as SERVO_KINDS
 from nnik.report.console import console, print_accuracy
 
 HELP = "quantise the trained MLP and write its fixed-point C to c/mlp/; --arduino: the pick's Arduino library"
@@ -27,8 +28,8 @@ def register(sub) -> None:
                    "directory (self-test and G-code example sketches)")
     p.add_argument("--job", metavar="JOB.gcode", help="a dc_servo xy_table: the job the library stores in flash "
                    "(default: the seed's circle, datasets/jobs/servo_circle.gcode)")
-    p.add_argument("--controller", choices=("pid", "pdff", "ccc"),
-                   help="a dc_servo xy_table: the tuned controller to export (default: the one `nnik run` chose)")
+    p.add_argument("--controller", choices=SERVO_KINDS, help="a dc_servo xy_table: the tuned or pretrained "
+                   "controller to export (default: the one `nnik run` chose)")
     p.set_defaults(func=cmd_export)
 
 

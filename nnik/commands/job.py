@@ -13,6 +13,7 @@ from nnik.commands import common_options as co, option_types as opt
 from nnik.commands.model_dirs import OUTDIR_DEFAULT
 from nnik.errors import NnikError
 from nnik.files.outdir import JOB_DIR, check_model_dir
+from nnik.job.servo_dir import KINDS as SERVO_KINDS
 
 console = Console(markup=False)  # text, not markup: "[motion] max_contour_um", "- (no [dynamics])" as they are
 
@@ -53,7 +54,7 @@ def register(sub) -> None:
                    help="write OUTDIR/job/JOB_precompensated.gcode (the job rewritten so the modelled belts' tip "
                         "follows the path) and run that instead")
     p.add_argument("--no-chip", action="store_true", help="Python model only, no simavr run")
-    p.add_argument("--controller", choices=("pid", "pdff", "ccc"),
+    p.add_argument("--controller", choices=SERVO_KINDS,
                    help="a dc_servo xy_table's controller (default: the one `nnik run` chose)")
     p.add_argument("--mcu", choices=("atmega328p", "atmega2560"), default="atmega328p",
                    help="the simulated chip: the Uno's atmega328p (default) or the Mega's atmega2560")

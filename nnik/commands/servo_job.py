@@ -1,9 +1,11 @@
 """`nnik job` on a DC-servo xy_table: the job closed loop (nnik.job.closed_loop), its figures printed.
 
-`nnik job OUTDIR JOB.gcode [--controller pid|pdff|ccc]` (OUTDIR: what `nnik run` wrote for a
-dc_servo xy_table), or `nnik job SCENARIO.toml JOB.gcode [-o OUTDIR]`. Prints the contour error
-(max and RMS, um), the tracking error per axis, the duty's saturation, the chip's cycles per tick
-and `mismatch N` (the ticks where the chip's duty differs from the model's; exit 2 when N > 0).
+`nnik job OUTDIR JOB.gcode [--controller pid|pdff|ccc|nn_axes|nn_vector]` (OUTDIR: what `nnik run`
+wrote for a dc_servo xy_table), or `nnik job SCENARIO.toml JOB.gcode [-o OUTDIR]`. Prints the
+contour error (max and RMS, um), the tracking error per axis, the duty's saturation, a learning
+controller's weight updates and clamps (diverged when the clamps pass 1 % of the updates), the
+chip's cycles per tick and `mismatch N` (the ticks where the chip's duty, or its weights' checksum,
+differs from the model's; exit 2 when N > 0).
 """
 
 from __future__ import annotations
@@ -51,7 +53,7 @@ def cmd_servo_job(args, target) -> dict:
     print_servo_job(res)
     chip = res.get("chip", {})
     if chip.get("mismatches"):
-        raise NnikError(f"the chip's duty differs from the model's at {chip['mismatches']} ticks", res["job"])
+        raise NnikError(f"the chip's duty or weights differ from the model's at {chip['mismatches']} ticks", res["job"])
     return res
 
 
@@ -71,6 +73,10 @@ def print_servo_job(res: dict) -> None:
         settle = "not settled" if s["settling_s"] is None else f"settles in {s['settling_s']:.3f} s"
         print(f"step to X{s['to_mm'][0]:g} Y{s['to_mm'][1]:g} mm: overshoot {s['overshoot_um']:.1f} um, {settle} "
               f"(+-{s['settle_band_um']:.0f} um), steady-state error {s['steady_state_um']:.1f} um")
+    lr = res.get("learning")
+    if lr:
+        print(f"learning: {lr['updates']} weight updates, {lr['clamps']} clamps ({lr['clamp_pct']:.2f} %): "
+              + ("DIVERGED (clamps > 1 % of the updates)" if lr["diverged"] else "not diverged"))
     if res["reversals"]["count"]:
         print(f"at reversals ({res['reversals']['count']}): contour error max {res['reversals']['max_um']:.1f} um")
     chip = res["chip"]

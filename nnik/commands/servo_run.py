@@ -1,15 +1,22 @@
-"""`nnik run SCENARIO` on a DC-servo xy_table: identify the plant, tune the baselines, run the
-seed's tests closed loop, write the report.
+"""`nnik run SCENARIO` on a DC-servo xy_table: identify the plant, tune the baselines, pretrain the
+neural controllers, run the seed's tests closed loop, compare, write the report.
 
 1. excitation (nnik.dynamics.servo.excite_plan: the seed's square + noise, both axes at once) on
    the scenario's plant, its log -> identify (nnik.dynamics.servo.fit: K and tau per axis);
 2. tune pid, pdff and ccc against the identified models (nnik.implementations.servo.tune) on the
    reference job (datasets/jobs/xy_table_reference.gcode), the same trials and seed for each;
-3. every shipped test (TESTS) closed loop with each controller on the scenario's (true) plant, in
-   Python and on the simulated Uno when the toolchain is there (the chosen controller's C);
-4. OUTDIR: scenario.toml, servo/identified.toml, servo/gains.json, c/ (the chosen controller's
-   C), report/closed_loop.md with one PNG per test, job/ (each test's figures).
-The default controller is the lowest RMS contour error on the reference job, on the true plant.
+3. pretrain nn_axes and nn_vector on the identified models (nnik.job.servo_pretrain) on the seed's
+   steps (the shipped step tests) and the reference job, from the [controller] seed;
+4. the default controller (nnik.commands.servo_default): the lowest RMS contour error on the
+   reference job on the IDENTIFIED plant (what a real rig gives), named with why;
+5. every shipped test (TESTS) closed loop with each of the 5 controllers on the scenario's (true)
+   plant, in Python and on the simulated Uno when the toolchain is there (every controller's C,
+   chip = model tick by tick: duties and the neural weights' checksum, mismatch 0 required);
+6. the honest comparison (nnik.job.servo_compare): every controller on the nominal, drifting and
+   differing plants on every test, its tables and learning curves in the report;
+7. OUTDIR: scenario.toml, servo/identified.toml, servo/gains.json (the baselines' gains, the neural
+   params), servo/pretrain.json (the pretraining's log), c/ (the chosen controller's C),
+   report/closed_loop.md with one PNG per test, report/compare.md and learning_*.png, job/.
 """
 
 from __future__ import annotations
@@ -20,13 +27,14 @@ import time
 from pathlib import Path
 
 from nnik.errors import NnikError
+from nnik.implementations.servo import BASELINES, KINDS, NEURAL
 
 JOBS = Path(__file__).resolve().parents[2] / "datasets" / "jobs"
 REFERENCE_JOB = "xy_table_reference.gcode"
 TESTS = ("servo_step_x25.gcode", "servo_step_y20.gcode", "servo_step_sequence.gcode", "servo_circle.gcode",
          REFERENCE_JOB)
-KINDS = ("pid", "pdff", "ccc")
 EXCITE_S = 20.0
+PRETRAIN_FILE = "servo/pretrain.json"
 
 
 def identify(scn, seed: int):
@@ -49,7 +57,9 @@ def identify(scn, seed: int):
 
 
 def run_servo(scn, out: Path, say=print, use_chip: bool | None = None) -> dict:
+    from nnik.commands.servo_default import choose, identified_scores
     from nnik.commands.servo_report_md import write_report
+    from nnik.implementations.servo import make
     from nnik.implementations.servo.tune import tune
     from nnik.job.closed_loop import ClosedLoopJob
     from nnik.job.parse import JobRequest
@@ -69,33 +79,53 @@ def run_servo(scn, out: Path, say=print, use_chip: bool | None = None) -> dict:
     (out / IDENTIFIED_FILE).write_text("".join(f.model.scenario_lines(f.axis) + "\n" for f in fits))
     models = tuple(f.model for f in fits)
     _, ref = job_reference(JobRequest(JOBS / REFERENCE_JOB, scn))
+    coulomb = tuple(f.coulomb_v for f in fits)
     gains = {}
-    for kind in KINDS:
+    for kind in BASELINES:
         gains[kind] = tune(kind, scn.servo, models, ref.counts, trials, seed, limits["max_overshoot_um"],
-                           limits["max_saturated_fraction"], tuple(f.coulomb_v for f in fits))
+                           limits["max_saturated_fraction"], coulomb)
         say(f"tuned {kind} on {REFERENCE_JOB} against the identified model ({trials} trials): "
             + ", ".join(f"{k} {v:.4g}" for k, v in gains[kind].items()))
-    model = ServoDir(out, scn, KINDS[0], gains)
+    pretrained = _pretrain(scn, models, coulomb, seed, say)
+    gains.update({k: p for k, (p, _) in pretrained.items()})
+    scores = identified_scores(scn.servo, models, coulomb, {k: make(k, gains[k], scn.servo) for k in KINDS}, ref)
+    best, why = choose(ctl["kind"], scores, REFERENCE_JOB)
+    say(f"default controller: {best} ({why}; " + ", ".join(f"{k} {s['rms_um']:.1f}" for k, s in scores.items())
+        + " um)")
+    model = ServoDir(out, scn, best, gains)
     results = {}
     for job in TESTS:
         req = JobRequest(JOBS / job, scn)
         results[job] = {k: ClosedLoopJob(k, False, tag=k).run(model, req) for k in KINDS}
-    lowest = min(KINDS, key=lambda k: results[REFERENCE_JOB][k]["contour_um"]["rms_um"])
-    best = lowest if ctl["kind"] == "auto" else ctl["kind"]
-    data = {"chosen": best, "gains": gains, "reference_job": REFERENCE_JOB, "trials": trials, "seed": seed}
+    (out / PRETRAIN_FILE).write_text(json.dumps({k: lg for k, (_, lg) in pretrained.items()}, indent=1) + "\n")
+    data = {"chosen": best, "gains": gains, "reference_job": REFERENCE_JOB, "trials": trials, "seed": seed,
+            "default": {"why": why, "identified_plant": scores, "coulomb_v": list(coulomb)}}
     (out / GAINS_FILE).write_text(json.dumps(data, indent=2) + "\n")  # last: a model dir only once it is whole
-    why = (f"the lowest RMS contour error on {REFERENCE_JOB}" if best == lowest else
-           f"[controller] kind; the lowest RMS contour error on {REFERENCE_JOB} is {lowest}'s")
-    say(f"default controller: {best} ({why}: {results[REFERENCE_JOB][best]['contour_um']['rms_um']:.1f} um)")
     from nnik.implementations.servo.emit_c import write_controller_c
 
     write_controller_c(model.controller(best), out / "c", f"nnik run {scn.source}: {best}, the default controller")
     say(f"C of {best}: {out / 'c'}/ (nnik_servo_config.h with its gains, the controllers' sources)")
-    model = ServoDir(out, scn, best, gains)
     chip = _chip(out, scn, model, use_chip, say)
-    md = write_report(out, scn, fits, gains, best, results, chip)
+    from nnik.job.servo_compare import compare
+
+    cmp = compare(scn, gains, out / "report", say, jobs=[JOBS / j for j in TESTS], models=models)
+    md = write_report(out, scn, fits, gains, best, results, chip,
+                      {"why": why, "scores": scores, "pretrain": {k: lg for k, (_, lg) in pretrained.items()},
+                       "compare": cmp})
     say(f"report: {md}")
     return {"chosen": best, "results": results, "chip": chip, "seconds": time.perf_counter() - t0}
+
+
+def _pretrain(scn, models, coulomb, seed: int, say) -> dict:
+    """kind -> (params, log) of each neural controller (nnik.job.servo_pretrain: the seed's steps and
+    the reference job on the identified models), and the impulse Jacobians beside the seed's."""
+    from nnik.job.servo_pretrain import pretrain_all
+
+    params, logs = pretrain_all(scn, models, coulomb, seed, say=say)
+    jac = next(iter(logs.values()))["jacobian"]
+    say(f"impulse Jacobians on the identified model (12 V, 40 mm): X {jac[0]:.4f}, Y {jac[1]:.4f} (the seed's rig: "
+        "X 1.0103, Y 0.6047)")
+    return {k: (params[k], logs[k]) for k in params}
 
 
 def _chip(out: Path, scn, model, use_chip: bool | None, say) -> dict:

@@ -25,7 +25,7 @@ from nnik.job.servo_report import picture, write
 
 @dataclass
 class ClosedLoopJob(JobKind):
-    """controller: pid, pdff or ccc (None: the run's chosen one); use_chip None: on the simulated
+    """controller: pid, pdff, ccc, nn_axes or nn_vector (None: the run's chosen one); use_chip None: on the simulated
     Uno when the toolchain is there; check: parse and plan only (the reference), nothing written."""
 
     controller: str | None = None
@@ -52,4 +52,5 @@ class ClosedLoopJob(JobKind):
         png = picture(out / f"{stem}.png", f"{scn.name}: {request.job.name}, {kind}; contour error max "
                       f"{figures['contour_um']['max_um']:.1f} µm, RMS {figures['contour_um']['rms_um']:.1f} µm",
                       ref.um, looped.trace.table_um, contour, looped.trace.duty, ref.tick_s, scn.servo.duty_max)
-        return write({**head, "controller": kind, **figures, "chip": looped.chip, "png": png}, out, stem)
+        learning = {} if looped.learning is None else {"learning": looped.learning}
+        return write({**head, "controller": kind, **figures, **learning, "chip": looped.chip, "png": png}, out, stem)

@@ -3,7 +3,9 @@ job OUTDIR JOB.gcode` reads), read once:
 
     OUTDIR/scenario.toml            the scenario as run (its [servo] is the true plant)
     OUTDIR/servo/identified.toml    the identified speed models, as scenario lines
-    OUTDIR/servo/gains.json         {"chosen": KIND, "gains": {KIND: {...}}, "objective": ...}
+    OUTDIR/servo/gains.json         {"chosen": KIND, "gains": {KIND: {...}}, "objective": ...}: a
+                                    baseline's gains, a neural controller's params (its pretrained
+                                    integer weights and formats, nnik.implementations.servo.nn)
     OUTDIR/c/                       the chosen controller's C and nnik_servo_config.h
     OUTDIR/report/closed_loop.md    the seed's tests per controller, and their PNGs
     OUTDIR/job/JOB.json, JOB.png    each closed-loop job
@@ -16,12 +18,12 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from nnik.errors import NnikError
+from nnik.implementations.servo import KINDS  # noqa: F401 (the baselines, then the learning controllers)
 
 SCENARIO_FILE = "scenario.toml"
 SERVO_DIR = "servo"
 GAINS_FILE = "servo/gains.json"
 IDENTIFIED_FILE = "servo/identified.toml"
-KINDS = ("pid", "pdff", "ccc")
 
 
 def is_servo_dir(path: Path) -> bool:

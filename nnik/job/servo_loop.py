@@ -3,7 +3,8 @@
 plant), and on the simulated Uno when the toolchain is there (nnik.firmware.servo.cosim: the
 controller's C on simavr, lockstep with the same plant; chip = model tick by tick).
 
-Reference + controller -> Looped: the Python trace, and the chip's figures (or why it did not run).
+Reference + controller -> Looped: the Python trace, a learning controller's weight clamps and
+updates over the job (learning_figures), and the chip's figures (or why it did not run).
 """
 
 from __future__ import annotations
@@ -19,6 +20,22 @@ from nnik.job.reference import Reference
 class Looped:
     trace: Trace  # what the table did (the chip's duties are checked equal to the model's)
     chip: dict  # mismatches, cycles per tick, CPU %; or {"not_run": why}
+    learning: dict | None = None  # a learning controller's clamps and updates (learning_figures); None: fixed gains
+
+
+# a run whose weight clamps pass this fraction of its weight updates is flagged as diverged (issue 29)
+DIVERGED_CLAMP_FRACTION = 0.01
+
+
+def learning_figures(controller) -> dict | None:
+    """A learning controller's weight updates and clamps since its reset, the clamps' share, the
+    diverged flag (clamps > DIVERGED_CLAMP_FRACTION of the updates) and its weights' checksum; None
+    for a controller without weights (pid, pdff, ccc)."""
+    if not hasattr(controller, "clamps"):
+        return None
+    clamps, updates = int(controller.clamps), int(controller.updates)
+    return {"updates": updates, "clamps": clamps, "clamp_pct": 100.0 * clamps / updates if updates else 0.0,
+            "diverged": clamps > DIVERGED_CLAMP_FRACTION * updates, "checksum": int(controller.checksum())}
 
 
 def chip_missing() -> str | None:
@@ -36,9 +53,10 @@ def loop(ref: Reference, cfg, controller, work: Path, use_chip: bool | None) -> 
     from nnik.errors import NnikError
 
     trace = simulate(cfg, controller, ref.counts)
+    learning = learning_figures(controller)  # before the co-simulation resets it
     why = chip_missing()
     if use_chip is False or (use_chip is None and why):
-        return Looped(trace, {"not_run": "not asked" if use_chip is False else why})
+        return Looped(trace, {"not_run": "not asked" if use_chip is False else why}, learning)
     if why:
         raise NnikError(f"avr: {why}")
     from nnik.firmware.servo import cosim
@@ -50,13 +68,14 @@ def loop(ref: Reference, cfg, controller, work: Path, use_chip: bool | None) -> 
         co = cosim.run(fw, cfg, controller, ref.counts, work, start_counts=tuple(int(c) for c in ref.counts[0]))
     except TargetError as exc:
         raise NnikError(f"avr: {exc}") from None
-    return Looped(trace, chip_figures(co, fw, trace))
+    return Looped(trace, chip_figures(co, fw, trace), learning)
 
 
 def chip_figures(co, fw, trace: Trace) -> dict:
     """What the chip did: its duty against the model's (mismatches), the plant it drove against the
     Python loop's (the same motion when chip = model and no edge is lost), cycles and load."""
     return {"mismatches": co.mismatches, "first_mismatch_tick": int(co.mismatch_ticks[0]) if co.mismatches else None,
+            "checksum_mismatches": int((co.chip_sum != co.model_sum).sum()),
             "lost_count_ticks": co.lost_counts,
             "same_motion_as_the_model": bool((co.plant_counts == trace.counts).all()),
             "controller_cycles_max": co.cycles_max, "tick_isr_cycles_max": int(co.tick_isr_cycles.max()),

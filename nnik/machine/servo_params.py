@@ -19,7 +19,7 @@ MAX_SUBSTEPS = 1000
 MIN_SUBSTEPS = 4
 SUBSTEPS_PER_TAU_M = 20  # a substep is at most 1/20 of the mechanical time constant
 MAX_SEED = 2**32 - 1
-CONTROLLER_KINDS = ("auto", "pid", "pdff", "ccc")  # part 2 adds nn_axes and nn_vector
+CONTROLLER_KINDS = ("auto", "pid", "pdff", "ccc", "nn_axes", "nn_vector")
 
 
 def timer1_setting(tick_s: float) -> tuple[int, int] | None:
@@ -86,7 +86,8 @@ IDENTIFIED = {
 
 CONTROLLER = {
     "kind": Param("str", default="auto", choices=CONTROLLER_KINDS,
-                  doc="the controller to ship; auto: tune every baseline, ship the lowest contour error"),
+                  doc="the controller to ship; auto: the lowest RMS contour error on the reference job on the "
+                       "identified plant"),
     "tune_trials": Param("int", default=60, check=within(1, 10_000), doc="tuning trials per controller"),
     "seed": Param("int", default=0, check=within(0, MAX_SEED), doc="the tuner's seed"),
     "max_overshoot_um": Param("float", default=25.0, check=within(0.0, 1e6, unit=" um"),

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -16,7 +17,7 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
 JOBS = ROOT / "datasets" / "jobs"
-KINDS = ("pid", "pdff", "ccc")
+KINDS = ("pid", "pdff", "ccc", "nn_axes", "nn_vector")
 
 
 def nnik(*args, cwd=ROOT) -> subprocess.CompletedProcess:
@@ -38,10 +39,17 @@ def test_nnik_run_identifies_tunes_runs_the_seeds_tests_and_names_the_default(xy
     gains = json.loads((out / "servo" / "gains.json").read_text())
     assert set(gains["gains"]) == set(KINDS)
     ref = gains["reference_job"]
-    rms = {k: json.loads((out / "job" / f"{Path(ref).stem}_{k}.json").read_text())["contour_um"]["rms_um"]
-           for k in KINDS}
-    assert gains["chosen"] == min(rms, key=rms.get)
-    assert f"default controller: {gains['chosen']}" in r.stdout
+    # the default: the lowest RMS contour error on the reference job on the IDENTIFIED plant
+    stored = gains["default"]["identified_plant"]
+    assert set(stored) == set(KINDS) and len(gains["default"]["coulomb_v"]) == 2
+    assert gains["chosen"] == min((k for k in KINDS if not stored[k]["diverged"]), key=lambda k: stored[k]["rms_um"])
+    assert (f"default controller: {gains['chosen']} (the lowest RMS contour error (tuning's: to the path within "
+            f"+-0.5 s) on {ref} on the identified plant") \
+        in " ".join(r.stdout.split())
+    assert f"Default controller: **{gains['chosen']}**" in (out / "report" / "closed_loop.md").read_text()
+    logs = json.loads((out / "servo" / "pretrain.json").read_text())
+    for k in ("nn_axes", "nn_vector"):  # pretrained: integer weights stored, the log beside them
+        assert set(gains["gains"][k]) >= {"w1", "w2", "eta_shift", "jacobian", "in_shift"} and logs[k]["kind"] == k
     assert "[servo.x.identified]" in (out / "servo" / "identified.toml").read_text()
     md = (out / "report" / "closed_loop.md").read_text()
     for job in ("servo_step_x25", "servo_step_y20", "servo_step_sequence", "servo_circle"):
@@ -52,6 +60,13 @@ def test_nnik_run_identifies_tunes_runs_the_seeds_tests_and_names_the_default(xy
             assert res["controller"] == k and res["contour_um"]["max_um"] >= res["contour_um"]["rms_um"] >= 0
             if job.startswith("servo_step"):  # every step of the seed's tests is measured
                 assert len(res["steps"]) == res["reference"]["steps"] >= 1
+    for k in ("nn_axes", "nn_vector"):  # a learning controller's clamps, updates and diverged flag in its JSON
+        lr = json.loads((out / "job" / f"servo_circle_{k}.json").read_text())["learning"]
+        assert lr["updates"] > 0 and lr["diverged"] == (lr["clamps"] > 0.01 * lr["updates"])
+    assert "learning" not in json.loads((out / "job" / "servo_circle_pid.json").read_text())
+    assert "## Neural controllers against the tuned baselines" in md  # the comparison, its learning curves
+    curves = re.findall(r"!\[learning_[^]]*\]\(([^)]+)\)", md)
+    assert len(curves) == 2 * 5 and all((out / "report" / c).is_file() for c in curves)
     circle = json.loads((out / "job" / f"servo_circle_{gains['chosen']}.json").read_text())
     assert circle["reversals"]["count"] >= 4  # the circle's quadrants (and the approach's stop)
 
@@ -67,6 +82,17 @@ def test_nnik_job_runs_a_step_closed_loop_in_python(xy_run, tmp_path):
     assert s["to_mm"] == [25.0, 0.0] and s["settling_s"] is not None
     assert s["steady_state_um"] < 50  # the PID's integral holds the target within a few counts
     assert "chip: not run (not asked)" in r.stdout
+
+
+def test_nnik_job_prints_a_learning_controllers_clamps(xy_run):
+    out, _ = xy_run
+    r = nnik("job", out, JOBS / "servo_step_y20.gcode", "--no-chip", "--controller", "nn_axes")
+    assert r.returncode == 0, r.stderr
+    lr = json.loads((out / "job" / "servo_step_y20.json").read_text())["learning"]
+    assert (f"learning: {lr['updates']} weight updates, {lr['clamps']} clamps ({lr['clamp_pct']:.2f} %): "
+            + ("DIVERGED" if lr["diverged"] else "not diverged")) in r.stdout
+    r = nnik("job", out, JOBS / "servo_step_y20.gcode", "--no-chip", "--controller", "lqr")
+    assert r.returncode == 2 and "invalid choice: 'lqr'" in r.stderr and "nn_vector" in r.stderr
 
 
 def test_nnik_job_on_the_chip_is_bit_exact(xy_run):
@@ -125,3 +151,38 @@ def test_nnik_export_writes_the_servo_library_with_the_stored_circle(xy_run, tmp
     r = nnik("export", out, "--arduino", tmp_path / "lib3", "--job", long_job)
     assert r.returncode == 2 and r.stderr.count("\n") == 1 and "do not fit" in r.stderr, r.stderr
     assert not (tmp_path / "lib3").exists()
+
+
+@pytest.mark.parametrize("kind", ("nn_axes", "nn_vector"))
+def test_nnik_export_a_neural_controller_builds_with_arduino_mk(xy_run, tmp_path, kind):
+    """`nnik export OUTDIR --arduino DIR --controller nn_*`: the library runs the controller from its
+    pretrained weights (the run's params in its config header), builds and fits the Uno; the seed's
+    125 s circle (about 23.6 kB stored) is too long beside a learning controller: one line, nothing
+    written."""
+    import shutil
+
+    from nnik.targets.avr import elf_sizes
+
+    out, _ = xy_run
+    from nnik.firmware.servo.export import JOB_FLASH_BYTES_LEARNING
+
+    r = nnik("export", out, "--arduino", tmp_path / "circle", "--controller", kind)
+    if r.returncode:  # the circle does not fit beside the network
+        assert r.returncode == 2 and r.stderr.count("\n") == 1 and "do not fit" in r.stderr, r.stderr
+        assert f"{JOB_FLASH_BYTES_LEARNING:,} B for the job beside the {kind} controller" in r.stderr
+        assert not (tmp_path / "circle").exists()
+    r = nnik("export", out, "--arduino", tmp_path / "lib", "--controller", kind, "--job",
+             JOBS / "xy_table_reference.gcode")
+    assert r.returncode == 0 and f"example xy_table_servo: {kind}, job xy_table_reference.gcode" in r.stdout, r.stderr
+    w1 = json.loads((out / "servo" / "gains.json").read_text())["gains"][kind]["w1"]
+    config = (tmp_path / "lib" / "src" / "nnik_servo_config.h").read_text()
+    assert f"NNIK_CTL_{kind.upper()} 1" in config and f"{w1[0][0][0]}L" in config
+    if not Path("/usr/share/arduino/Arduino.mk").is_file() or shutil.which("make") is None:
+        if os.environ.get("NNIK_REQUIRE_TOOLCHAINS") == "1":
+            pytest.fail("arduino-mk not installed")
+        pytest.skip("arduino-mk not installed")
+    ex = tmp_path / "lib" / "examples" / "xy_table_servo"
+    b = subprocess.run(["make", "-s"], cwd=ex, capture_output=True, text=True, timeout=600)
+    assert b.returncode == 0, b.stderr[-800:]
+    size = elf_sizes(next((ex / "build-uno").glob("*.elf")), tmp_path)
+    assert size["flash"] <= 32 * 1024 - 512 and size["ram"] <= 2048

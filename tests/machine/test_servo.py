@@ -72,7 +72,7 @@ def test_the_shipped_scenario_loads():
     ("servo", "pwm_bits", "10", "must be one of 8"),
     ("servo", "supply_v", "-12.0", "must be in (0, 60] V"),
     ("servo", "encoder", '"gray"', "must be one of quadrature, counter8"),
-    ("controller", "kind", '"nn_vector"', "must be one of auto, pid, pdff, ccc"),
+    ("controller", "kind", '"lqr"', "must be one of auto, pid, pdff, ccc, nn_axes, nn_vector"),
     ("controller", "tune_trials", "0", "must be in [1, 10000]"),
     ("controller", "max_saturated_fraction", "1.5", "must be in [0, 1]"),
 ])

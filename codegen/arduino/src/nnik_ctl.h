@@ -20,6 +20,11 @@ void nnik_ctl_reset(void);
  * [-NNIK_DUTY_MAX, NNIK_DUTY_MAX] out (sign: direction). */
 void nnik_ctl_tick(const int32_t ref[2], const int32_t pos[2], int16_t duty[2]);
 
+/* A learning controller's (nnik_ctl_nn_*.c): its weights' checksum after the last tick (or reset),
+ * the sum of every weight's int32 master word modulo 2^16, the Python model's checksum(). The
+ * runtime (nnik_servo.c) publishes it each tick as nnik_servo_sum for the co-simulation's check. */
+extern uint16_t nnik_ctl_sum;
+
 #ifdef __cplusplus
 }
 #endif

@@ -13,6 +13,10 @@
 volatile int32_t nnik_servo_count[2];
 volatile int32_t nnik_servo_pos[2];
 volatile int16_t nnik_servo_duty[2];
+volatile uint16_t nnik_servo_sum;
+#if defined(NNIK_CTL_NN_AXES) || defined(NNIK_CTL_NN_VECTOR)
+#define NNIK_SERVO_LEARNS 1 /* the controller keeps weights: their checksum is published each tick */
+#endif
 static uint8_t enc_prev;         /* PINC's four encoder bits at the last interrupt */
 static volatile uint16_t enc16[2]; /* the counts modulo 2^16: the interrupt's 16-bit work */
 static uint16_t enc16_seen[2];   /* enc16 when nnik_servo_count was last brought up to date */
@@ -105,5 +109,8 @@ ISR(TIMER1_COMPA_vect)
     nnik_servo_duty[0] = duty[0];
     nnik_servo_duty[1] = duty[1];
     PORTB &= (uint8_t)~_BV(PB5);
+#ifdef NNIK_SERVO_LEARNS
+    nnik_servo_sum = nnik_ctl_sum; /* after the busy pin: the check's copy, not the controller's work */
+#endif
 }
 #endif

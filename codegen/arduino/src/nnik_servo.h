@@ -35,6 +35,9 @@ extern volatile int32_t nnik_servo_count[2];
 /* The counts the last tick latched, and its duties (sign: direction). */
 extern volatile int32_t nnik_servo_pos[2];
 extern volatile int16_t nnik_servo_duty[2];
+/* A learning controller's weights' checksum after the last tick (nnik_ctl_sum; 0 for the fixed-gain
+ * controllers): volatile, so a link-time optimised sketch keeps it for the co-simulation to read. */
+extern volatile uint16_t nnik_servo_sum;
 
 /* Set up the pins, the encoder interrupt, the PWM and the tick (counts start at x, y); the
  * caller enables interrupts. */

@@ -3,12 +3,14 @@
  * nnik_servo_feed.c) on a simulated ATmega328P (simavr, 16 MHz), in lockstep with a plant over
  * stdin/stdout, one tick per exchange (binary, little-endian int32).
  *
- * usage: nnik_simavr_servo FIRMWARE.elf PERIOD SUBSTEPS FEED COUNT POS X0 Y0
+ * usage: nnik_simavr_servo FIRMWARE.elf PERIOD SUBSTEPS FEED COUNT POS X0 Y0 [SUM]
  *   PERIOD    the tick in cycles ((OCR1A + 1) * 8)
  *   SUBSTEPS  the plant's substeps per tick
  *   FEED, COUNT, POS  the SRAM addresses of nnik_servo_feed, nnik_servo_count, nnik_servo_pos
  *   X0, Y0    the start counts (the encoder pins start in their phase; the counts are written
  *             once the firmware's set-up sleeps, before the first tick)
+ *   SUM       the SRAM address of nnik_servo_sum (uint16: a learning controller's weight checksum);
+ *             0 or absent: none (a controller that does not learn; its answer is 0)
  *   FEED 0: a firmware with its own reference (an exported sketch playing its stored job, which
  *             sets its start counts itself): no reference is written, the references sent are
  *             ignored, and the awake cycles count the sketch's main loop too (it does not sleep)
@@ -18,12 +20,12 @@
  *   SUBSTEPS equal slices of the window from GUARD cycles after the last tick's interrupt ended
  *   to GUARD cycles before tick k's (the plant holds the tick's duty from its start, as the
  *   Python model does; no edge meets the latch).
- * answer k (12 int32): duty x, duty y (OCR2A/B, 0 when the output is disconnected, negative when
+ * answer k (13 int32): duty x, duty y (OCR2A/B, 0 when the output is disconnected, negative when
  *   the DIR pin is high), the latched counts x, y, the busy cycles (D13 high, less the encoder
  *   interrupts nested in it), the tick interrupt's cycles (entry to return, less nested ones),
  *   the encoder interrupts' cycles and their number since the last answer, the awake cycles since
  *   the last answer (the main loop sleeps, so these are all interrupt work), the longest encoder
- *   interrupt, the chip's encoder counts x, y now.
+ *   interrupt, the chip's encoder counts x, y now, the weight checksum nnik_servo_sum (0 without SUM).
  * UART: with NNIK_SERVO_UART=PATH in the environment, every byte the chip sends on UART0 is
  *   appended to PATH as it leaves the simulated transmitter (simavr paces it at the baud rate).
  * An interrupt's cycles run from the cycle its vector is taken (simavr's instruction boundary,
@@ -62,6 +64,7 @@
 #define R_TCCR2A 0xB0
 #define R_OCR2A 0xB3
 #define R_OCR2B 0xB4
+#define ANSWER 13        /* int32 per answer */
 
 struct edge {
     uint64_t cycle;
@@ -344,16 +347,16 @@ int main(int argc, char **argv)
 {
     uint64_t period;
     int substeps, j, a;
-    unsigned feed, count, pos;
-    int32_t last[2], start[2], *req, ans[12];
+    unsigned feed, count, pos, sum = 0;
+    int32_t last[2], start[2], *req, ans[ANSWER];
     long k;
     out = fdopen(dup(1), "wb");
     if (!out || dup2(2, 1) < 0)
         return 2;
     if (argc > 1 && strcmp(argv[1], "-r") == 0)
         return sweep(argc, argv);
-    if (argc != 9) {
-        fprintf(stderr, "usage: %s FIRMWARE.elf PERIOD SUBSTEPS FEED COUNT POS X0 Y0\n", argv[0]);
+    if (argc != 9 && argc != 10) {
+        fprintf(stderr, "usage: %s FIRMWARE.elf PERIOD SUBSTEPS FEED COUNT POS X0 Y0 [SUM]\n", argv[0]);
         return 2;
     }
     period = strtoull(argv[2], NULL, 0);
@@ -363,6 +366,8 @@ int main(int argc, char **argv)
     pos = (unsigned)strtoul(argv[6], NULL, 0);
     start[0] = (int32_t)strtol(argv[7], NULL, 0);
     start[1] = (int32_t)strtol(argv[8], NULL, 0);
+    if (argc == 10)
+        sum = (unsigned)strtoul(argv[9], NULL, 0);
     if (substeps < 1 || period < 8 * GUARD) {
         fprintf(stderr, "bad substeps or period\n");
         return 2;
@@ -431,7 +436,8 @@ int main(int argc, char **argv)
         ans[9] = (int32_t)enc_max;
         ans[10] = rd32(count);
         ans[11] = rd32(count + 4);
-        if (fwrite(ans, sizeof ans[0], 12, out) != 12)
+        ans[12] = sum ? (int32_t)(avr->data[sum] | (unsigned)avr->data[sum + 1] << 8) : 0;
+        if (fwrite(ans, sizeof ans[0], ANSWER, out) != ANSWER)
             return 2;
         fflush(out);
         if (uart_log)

@@ -4,7 +4,10 @@ against the plant, one tick at a time.
 At tick k the controller sees ref[k] and the encoder counts at tick k, and returns the duty the
 plant holds from tick k to k + 1. The trace's row k is tick k: the counts and the table position
 the controller saw there, and the duty it chose (rounded and saturated as the plant applies it).
-The plant starts at rest at ref[0] unless start_counts says otherwise.
+The plant starts at rest at ref[0] unless start_counts says otherwise; `plant` replaces the
+scenario's Plant by another with the same step() / counts / table_um / duty() (a drifting one,
+nnik.dynamics.servo.drift), and `after_tick(k)` is called after the controller's tick k (to read
+its state, e.g. a learning controller's weights).
 """
 
 from __future__ import annotations
@@ -33,11 +36,11 @@ class Trace:
 
 
 def simulate(cfg: ServoConfig, controller, ref_counts, substeps: bool = False,
-             start_counts: tuple[int, int] | None = None) -> Trace:
+             start_counts: tuple[int, int] | None = None, plant=None, after_tick=None) -> Trace:
     ref = np.asarray(ref_counts, dtype=np.int64).reshape(-1, 2)
     n = len(ref)
     start = tuple(int(c) for c in (ref[0] if start_counts is None and n else (start_counts or (0, 0))))
-    plant = Plant(cfg, start)
+    plant = Plant(cfg, start) if plant is None else plant
     controller.reset()
     counts = np.empty((n, 2), dtype=np.int64)
     duty = np.empty((n, 2), dtype=np.int64)
@@ -47,6 +50,8 @@ def simulate(cfg: ServoConfig, controller, ref_counts, substeps: bool = False,
         pos = plant.counts
         counts[k], table[k] = pos, plant.table_um
         d = controller.tick((int(ref[k, 0]), int(ref[k, 1])), pos)
+        if after_tick is not None:
+            after_tick(k)
         duty[k] = plant.duty(d[0]), plant.duty(d[1])
         rows = plant.step((duty[k, 0], duty[k, 1]))
         if subs is not None:

@@ -27,6 +27,10 @@ RUNTIME_HEADERS = ("nnik_servo.h",)
 FEED = HARNESS_DIR / "arduino" / "nnik_servo_feed.c"
 HARNESS_SRC = HARNESS_DIR / "arduino" / "nnik_simavr_servo.c"
 SYMBOLS = ("nnik_servo_feed", "nnik_servo_count", "nnik_servo_pos")
+# a learning controller's weight checksum (nnik_servo.c publishes its nnik_ctl_sum each tick; with a
+# fixed-gain controller it is never written and a linker may drop it): address 0 when absent, which
+# the harness answers as checksum 0
+OPTIONAL_SYMBOLS = ("nnik_servo_sum",)
 
 
 @dataclass(frozen=True)
@@ -62,11 +66,12 @@ def copy_runtime(outdir: Path) -> list[Path]:
 
 
 def _symbols(elf: Path, cwd: Path, names=SYMBOLS) -> dict:
+    """names' SRAM addresses (each required) and OPTIONAL_SYMBOLS' (0 when absent)."""
     res = run([find_tool("avr-nm"), elf], "avr-nm", cwd=cwd)
-    found = {}
+    found = dict.fromkeys(OPTIONAL_SYMBOLS, 0)
     for line in res.stdout.splitlines():
         parts = line.split()
-        if len(parts) == 3 and parts[2] in names:
+        if len(parts) == 3 and (parts[2] in names or parts[2] in OPTIONAL_SYMBOLS):
             found[parts[2]] = int(parts[0], 16) - 0x800000
     missing = [s for s in names if s not in found]
     if missing:

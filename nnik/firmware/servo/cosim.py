@@ -1,6 +1,9 @@
 """The closed-loop co-simulation: the servo firmware on the simulated Uno (nnik_simavr_servo, in
 lockstep over a pipe) drives the Python plant, and the controller's integer Python model, fed the
-same reference and the counts the chip latched, predicts every duty (chip = model, tick by tick).
+same reference and the counts the chip latched, predicts every duty (chip = model, tick by tick)
+and, for a learning controller, its weights: the chip's weight checksum (nnik_servo_sum, the sum of
+every int32 master word modulo 2^16 after the tick) against the model's checksum() (0 for the
+fixed-gain controllers, whose chip reports 0). A tick mismatches when a duty or the checksum differs.
 
 Per tick k: the harness gets ref[k] and the plant's substep counts of the tick before (edges on
 PC0..PC3, spread after the last tick's computation and away from tick k's latch); the chip latches
@@ -25,7 +28,7 @@ from nnik.errors import NnikError
 from nnik.firmware.servo.build import ServoFirmware, build_harness
 from nnik.targets.toolchain import TargetError, first_error_line
 
-ANSWER = 12  # int32 per tick from the harness
+ANSWER = 13  # int32 per tick from the harness
 
 
 @dataclass
@@ -41,10 +44,18 @@ class ChipTrace:
     awake_cycles: np.ndarray  # (N,) the cycles the chip was awake in the tick before
     period_cycles: int
     table_um: np.ndarray | None = None  # (N, 2) the carriage after each tick, if the plant gives it
+    chip_sum: np.ndarray | None = None  # (N,) the chip's weight checksum after each tick (0: no weights)
+    model_sum: np.ndarray | None = None  # (N,) the model's checksum() after each tick
+
+    def __post_init__(self):
+        n = len(self.chip_duty)
+        self.chip_sum = np.zeros(n, np.int64) if self.chip_sum is None else np.asarray(self.chip_sum, np.int64)
+        self.model_sum = np.zeros(n, np.int64) if self.model_sum is None else np.asarray(self.model_sum, np.int64)
 
     @property
     def mismatch_ticks(self) -> np.ndarray:
-        return np.flatnonzero((self.chip_duty != self.model_duty).any(axis=1))
+        """The ticks where a duty or the weight checksum differs."""
+        return np.flatnonzero((self.chip_duty != self.model_duty).any(axis=1) | (self.chip_sum != self.model_sum))
 
     @property
     def mismatches(self) -> int:
@@ -66,7 +77,7 @@ class ChipTrace:
 
 
 class ChipSession:
-    """The harness process for one run: tick(ref, substep_counts) -> the answer's 12 ints."""
+    """The harness process for one run: tick(ref, substep_counts) -> the answer's 13 ints."""
 
     def __init__(self, fw: ServoFirmware, substeps: int, start_counts, workdir: Path, uart_log: Path | None = None):
         exe = build_harness(Path(workdir) / "harness")
@@ -74,7 +85,8 @@ class ChipSession:
         self.substeps = substeps
         self._err = open(Path(workdir) / "servo_harness.stderr", "w+")
         cmd = [str(exe), str(fw.elf), str(fw.period_cycles), str(substeps), str(s["nnik_servo_feed"]),
-               str(s["nnik_servo_count"]), str(s["nnik_servo_pos"]), *(str(int(c)) for c in start_counts)]
+               str(s["nnik_servo_count"]), str(s["nnik_servo_pos"]), *(str(int(c)) for c in start_counts),
+               str(s.get("nnik_servo_sum", 0))]
         try:
             env = None if uart_log is None else dict(os.environ, NNIK_SERVO_UART=str(uart_log))
             self.proc = subprocess.Popen(cmd, stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=self._err, env=env)
@@ -105,11 +117,11 @@ class ChipSession:
 
 
 def run(fw: ServoFirmware, cfg, controller, ref_counts, workdir: Path | None = None, plant=None,
-        start_counts=(0, 0), model_duty=None, uart_log: Path | None = None) -> ChipTrace:
+        start_counts=(0, 0), model_duty=None, uart_log: Path | None = None, model_sum=None) -> ChipTrace:
     """Run ref_counts ((N, 2) int, counts) closed loop: the chip (fw) drives `plant` (default
     nnik.dynamics.servo.plant.Plant(cfg, start_counts)); `controller` (the integer Python model,
     reset first) predicts each duty. model_duty(k, duty) may replace the model's duty (a test's
-    deliberately wrong model). workdir: where the harness is built and logs (default: beside the
+    deliberately wrong model), model_sum(k, checksum) the model's checksum. workdir: where the harness is built and logs (default: beside the
     firmware's ELF). uart_log: a file that receives every byte the chip sends on its UART."""
     ref = np.asarray(ref_counts, dtype=np.int64).reshape(-1, 2)
     if len(ref) == 0:
@@ -125,6 +137,7 @@ def run(fw: ServoFirmware, cfg, controller, ref_counts, workdir: Path | None = N
     n = len(ref)
     out = {k: np.zeros((n, 2), np.int64) for k in ("chip", "model", "counts", "plant")}
     scal = np.zeros((n, 5), np.int64)
+    sums = np.zeros((n, 2), np.int64)  # the chip's checksum, the model's
     table = np.zeros((n, 2))
     controller.reset()
     chip = ChipSession(fw, cfg.substeps, start, Path(workdir), uart_log)
@@ -139,10 +152,12 @@ def run(fw: ServoFirmware, cfg, controller, ref_counts, workdir: Path | None = N
             m = controller.tick((int(ref[k, 0]), int(ref[k, 1])), pos)
             out["model"][k] = m if model_duty is None else model_duty(k, m)
             out["chip"][k] = duty
+            s = int(controller.checksum())
+            sums[k] = ans[12], s if model_sum is None else model_sum(k, s)
             scal[k] = ans[4], ans[5], ans[6], ans[7], ans[8]
             rows = plant.step(duty)
             table[k] = plant.table_um
     finally:
         chip.close()
     return ChipTrace(out["chip"], out["model"], out["counts"], out["plant"], scal[:, 0], scal[:, 1], scal[:, 2],
-                     scal[:, 3], scal[:, 4], fw.period_cycles, table)
+                     scal[:, 3], scal[:, 4], fw.period_cycles, table, sums[:, 0], sums[:, 1])

@@ -1,7 +1,9 @@
 """The servo controllers' common interface (docs: /docs/closed_loop.md "Controllers").
 
-A controller is duck-typed: `kind`, `reset()`, `tick(ref, pos) -> (duty_x, duty_y)` and
-`c_defines()` (the gains and formats as C macros for the generated nnik_servo_config.h). Each tick
+A controller is duck-typed: `kind`, `reset()`, `tick(ref, pos) -> (duty_x, duty_y)`,
+`c_defines()` (the gains and formats as C macros for the generated nnik_servo_config.h) and
+`checksum()` (the sum of its weights' int32 master words modulo 2^16 after the last tick, which the
+chip reports as nnik_ctl_sum, published by the runtime as nnik_servo_sum; 0 for the fixed-gain controllers, FixedGains). Each tick
 it sees the reference and the encoder counts (int32 counts per axis) and returns the duty the plant
 holds until the next tick. Its integer arithmetic is the specification of the C in
 codegen/arduino/src/nnik_ctl_<kind>.c, which matches it bit for bit.
@@ -29,6 +31,16 @@ class ServoController(Protocol):
     def tick(self, ref: tuple[int, int], pos: tuple[int, int]) -> tuple[int, int]: ...
 
     def c_defines(self) -> dict[str, int]: ...
+
+    def checksum(self) -> int: ...
+
+
+class FixedGains:
+    """A controller that does not learn (pid, pdff, ccc): no weights, checksum 0, as its chip's
+    nnik_servo_sum (never set) reads."""
+
+    def checksum(self) -> int:
+        return 0
 
 
 def check_gains(kind: str, gains: dict, names: tuple[str, ...], optional: dict[str, float]) -> dict:

@@ -29,6 +29,21 @@ def model_duties(controller, rows) -> np.ndarray:
 def host_duties(controller, rows, cc: str = "gcc", reset_before: tuple[int, ...] = ()) -> np.ndarray:
     """The controller's C compiled on the host: its duty per row, from a reset (and a reset before
     each row index in reset_before)."""
+    return host_run(controller, rows, cc, reset_before)["duty"]
+
+
+def model_sums(controller, rows) -> np.ndarray:
+    """The Python model's weights' checksum after each row, from a reset (0 for a controller without)."""
+    controller.reset()
+    out = []
+    for r in rows:
+        controller.tick((int(r[0]), int(r[1])), (int(r[2]), int(r[3])))
+        out.append(controller.checksum() if hasattr(controller, "checksum") else 0)
+    return np.array(out, dtype=np.int64)
+
+
+def host_run(controller, rows, cc: str = "gcc", reset_before: tuple[int, ...] = ()) -> dict:
+    """As host_duties: {"duty": (N, 2), "sum": (N,) nnik_ctl_sum after each tick (0 without one)}."""
     if shutil.which(cc) is None:
         raise NnikError(f"host C compiler {cc!r} not found")
     with tempfile.TemporaryDirectory() as tmp:
@@ -45,12 +60,14 @@ def host_duties(controller, rows, cc: str = "gcc", reset_before: tuple[int, ...]
                              env=dict(os.environ, ASAN_OPTIONS="detect_leaks=0"))
     if run.returncode != 0:
         raise NnikError(f"host run of the {controller.kind} controller failed: {run.stderr.strip()[:300]}")
-    return np.array(run.stdout.split(), dtype=np.int64).reshape(-1, 2)
+    out = np.array(run.stdout.split(), dtype=np.int64).reshape(-1, 3)
+    return {"duty": out[:, :2], "sum": out[:, 2]}
 
 
 def avr_run(controller, rows, workdir: Path | None = None) -> dict:
     """The controller's C on the simulated ATmega328P (avr-gcc -Os, simavr): {"duty": (N, 2),
-    "cycles": (N,) per tick, both axes, the wrapper's call included, "flash_bytes", "ram_bytes"}."""
+    "cycles": (N,) per tick, both axes, the wrapper's call included, "flash_bytes", "ram_bytes"}; a
+    controller with a weights' checksum (c_arrays: the neural ones) also "sum": (N,) nnik_ctl_sum."""
     from nnik.targets.avr import run_avr
 
     rows = np.asarray(rows, dtype=np.int64)
@@ -59,8 +76,12 @@ def avr_run(controller, rows, workdir: Path | None = None) -> dict:
     with tempfile.TemporaryDirectory() as tmp:
         d = Path(workdir or tmp)
         srcs = write_controller_c(controller, d / "src")
-        wrap = CODEGEN / "harness" / "servo" / "nnik_ctl_wrap.c"
-        res = run_avr([wrap, *srcs], [d / "src"], "nnik_ctl", rows, workdir=d, n_out=2, batch_size=len(rows),
-                      progress=False)
-    return {"duty": res["outputs"], "cycles": res["cycles"], "flash_bytes": res["model_flash_bytes"],
-            "ram_bytes": res["model_ram_bytes"]}
+        summed = hasattr(controller, "c_arrays")
+        wrap = CODEGEN / "harness" / "servo" / ("nnik_ctl_wrap_sum.c" if summed else "nnik_ctl_wrap.c")
+        res = run_avr([wrap, *srcs], [d / "src"], "nnik_ctl", rows, workdir=d, n_out=3 if summed else 2,
+                      batch_size=len(rows), progress=False)
+    out = {"duty": res["outputs"][:, :2], "cycles": res["cycles"], "flash_bytes": res["model_flash_bytes"],
+           "ram_bytes": res["model_ram_bytes"]}
+    if summed:
+        out["sum"] = res["outputs"][:, 2] & 0xFFFF
+    return out

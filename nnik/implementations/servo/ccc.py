@@ -25,7 +25,7 @@ from math import isqrt
 
 from nnik.errors import NnikError
 from nnik.implementations.servo import fixed as fx
-from nnik.implementations.servo.base import check_duty_max, check_gains
+from nnik.implementations.servo.base import FixedGains, check_duty_max, check_gains
 from nnik.implementations.servo.pid import NAMES as PID_NAMES
 from nnik.implementations.servo.pid import pid_axes, pid_gains_q
 from nnik.implementations.servo.window import RefHistory, check_window
@@ -37,7 +37,7 @@ CHORD_MAX = 2047  # the chord's components saturate here (5 mm over the window):
 UC_MAX = 3 << 15  # the correction's saturation, Q8 duty (384 duty): sin * uc stays inside int32 (|sin| <= 17,408)
 
 
-class Ccc:
+class Ccc(FixedGains):
     kind = "ccc"
 
     def __init__(self, gains: dict, tick_s: float, duty_max: int):

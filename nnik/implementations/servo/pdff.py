@@ -16,7 +16,7 @@ from __future__ import annotations
 
 from nnik.errors import NnikError
 from nnik.implementations.servo import fixed as fx
-from nnik.implementations.servo.base import check_duty_max, check_gains
+from nnik.implementations.servo.base import FixedGains, check_duty_max, check_gains
 from nnik.implementations.servo.window import RefHistory, check_window
 
 NAMES = ("kp_x", "kd_x", "kv_x", "ka_x", "kp_y", "kd_y", "kv_y", "ka_y")
@@ -27,7 +27,7 @@ def _sign(v: int) -> int:
     return (v > 0) - (v < 0)
 
 
-class Pdff:
+class Pdff(FixedGains):
     kind = "pdff"
 
     def __init__(self, gains: dict, tick_s: float, duty_max: int):

@@ -19,7 +19,7 @@ Q8.8, ki T in Q0.16; I in Q16 duty, clamped to +-duty_max << 16; e and dInput sa
 from __future__ import annotations
 
 from nnik.implementations.servo import fixed as fx
-from nnik.implementations.servo.base import check_duty_max, check_gains
+from nnik.implementations.servo.base import FixedGains, check_duty_max, check_gains
 
 NAMES = ("kp_x", "ki_x", "kd_x", "kp_y", "ki_y", "kd_y")
 
@@ -58,7 +58,7 @@ def pid_axes(q: dict[str, int], duty_max: int) -> tuple[PidAxis, PidAxis]:
     return tuple(PidAxis(q[f"NNIK_KP_{a}"], q[f"NNIK_KI_{a}"], q[f"NNIK_KD_{a}"], duty_max) for a in "XY")
 
 
-class Pid:
+class Pid(FixedGains):
     kind = "pid"
 
     def __init__(self, gains: dict, tick_s: float, duty_max: int):

@@ -20,7 +20,7 @@ from __future__ import annotations
 import numpy as np
 
 from nnik.errors import NnikError
-from nnik.implementations.servo import KINDS, make
+from nnik.implementations.servo import KINDS, NEURAL, make
 from nnik.implementations.servo.measure import score_run
 from nnik.implementations.servo.model_loop import simulate_model
 from nnik.implementations.servo.space import start_points, suggest
@@ -47,6 +47,8 @@ def tune(kind: str, cfg, models, ref_counts, trials: int, seed: int, max_oversho
     the identified Coulomb friction per axis, volts (model_loop.py), 0 for a linear model."""
     import optuna
 
+    if kind in NEURAL:
+        raise NnikError(f"{kind} is not tuned: the neural controllers are pretrained and learn online")
     if kind not in KINDS:
         raise NnikError(f"unknown controller kind {kind!r} (known: {', '.join(KINDS)})")
     ref = np.asarray(ref_counts, dtype=np.int64).reshape(-1, 2)

@@ -17,6 +17,12 @@ TICK_S = 0.005
 _BUILDS: dict = {}
 
 
+def shipped_cfg():
+    """datasets/xy_table.toml's plant."""
+    from nnik.machine.scenario import load_scenario
+    return load_scenario("datasets/xy_table.toml").servo
+
+
 def controller(kind: str, cfg):
     return make(kind, seeded_gains(kind, 3), cfg)
 

@@ -18,14 +18,9 @@ from nnik.firmware.servo.build import tick_ocr1a
 from nnik.firmware.servo.cosim import run
 from nnik.implementations.servo import KINDS
 from tests.dynamics.servo.plants import configs
-from tests.firmware.servo.chip_fixtures import controller, firmware, references
+from tests.firmware.servo.chip_fixtures import controller, firmware, references, shipped_cfg
 
 TOP_COUNTS_S = 25_000  # plants up to 62.5 mm/s at 2.5 um/count: twice the DOMAIN class's free speed
-
-
-def shipped_cfg():
-    from nnik.machine.scenario import load_scenario
-    return load_scenario("datasets/xy_table.toml").servo
 
 
 @pytest.mark.parametrize("kind", KINDS)
@@ -70,6 +65,18 @@ def test_a_wrong_model_is_caught(tmp_path):
     tr = run(fw, cfg, controller("pdff", cfg), ref, tmp_path / "run",
              model_duty=lambda k, d: (d[0] + (k == 17), d[1]))
     assert tr.mismatches == 1 and tr.mismatch_ticks.tolist() == [17]
+
+
+def test_a_wrong_weight_checksum_is_caught(tmp_path):
+    """The duties agree but the model's checksum is off at one tick: that tick mismatches. A
+    fixed-gain controller's chip never sets nnik_servo_sum: the harness reads 0 (or finds no such
+    variable: 0 too), as the model's checksum()."""
+    cfg = shipped_cfg()
+    ref = np.tile([400, -300], (30, 1))
+    fw = firmware("ccc", cfg, tmp_path)
+    tr = run(fw, cfg, controller("ccc", cfg), ref, tmp_path / "run", model_sum=lambda k, s: s + (k == 9))
+    assert tr.mismatch_ticks.tolist() == [9] and (tr.chip_duty == tr.model_duty).all()
+    assert (tr.chip_sum == 0).all() and tr.model_sum.tolist() == [int(k == 9) for k in range(30)]
 
 
 @pytest.mark.parametrize("tick_s", [0.0, 1e-7, 0.0333, 0.05, 0.0050001])

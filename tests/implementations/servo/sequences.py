@@ -9,6 +9,9 @@ from types import SimpleNamespace
 import numpy as np
 from hypothesis import strategies as st
 
+from nnik.implementations.servo import NEURAL
+from tests.implementations.servo.nn_params import nn_params, seeded_nn_params
+
 TICK_S = 0.005
 CFG = SimpleNamespace(tick_s=TICK_S, duty_max=255)
 Q8, Q16 = 256.0, 65536.0
@@ -24,6 +27,8 @@ def q8(draw) -> float:
 
 @st.composite
 def gains(draw, kind: str, tick_s: float = TICK_S) -> dict:
+    if kind in NEURAL:
+        return draw(nn_params(kind))
     g = {}
     pid_like = kind in ("pid", "ccc")
     for a in ("x", "y"):
@@ -78,6 +83,8 @@ def seeded_sequence(seed: int, n_segments: int = 40) -> np.ndarray:
 
 def seeded_gains(kind: str, seed: int, tick_s: float = TICK_S) -> dict:
     """Gains fixed by seed, every one non-zero (a zero gain lets the compiler drop its term)."""
+    if kind in NEURAL:
+        return seeded_nn_params(kind, seed, CFG)
     rng = np.random.default_rng(seed)
     g = make_plain(kind)
     for key in g:
@@ -86,7 +93,9 @@ def seeded_gains(kind: str, seed: int, tick_s: float = TICK_S) -> dict:
 
 
 def make_plain(kind: str) -> dict:
-    """Moderate gains of each kind (physical units, a 5 ms tick)."""
+    """Moderate gains of each kind (physical units, a 5 ms tick; the neural kinds: a seeded start)."""
+    if kind in NEURAL:
+        return seeded_nn_params(kind, 0, CFG)
     pid = dict(kp_x=2.0, ki_x=4.0, kd_x=0.02, kp_y=1.5, ki_y=3.0, kd_y=0.03)
     if kind == "pid":
         return pid

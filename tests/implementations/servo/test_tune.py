@@ -7,7 +7,7 @@ from __future__ import annotations
 import pytest
 
 from nnik.errors import NnikError
-from nnik.implementations.servo import KINDS
+from nnik.implementations.servo import BASELINES
 from nnik.implementations.servo.tune import evaluate, tune
 from tests.implementations.servo.paths import circle, corner, plant_models, xy_table_cfg
 
@@ -27,7 +27,7 @@ def setup():
 def tuned(setup):
     cfg, models, paths = setup
     return {(k, p): tune(k, cfg, models, ref, TRIALS, 7, max_overshoot_um=LIMIT_UM)
-            for k in KINDS for p, ref in paths.items()}
+            for k in BASELINES for p, ref in paths.items()}
 
 
 def test_tuning_is_deterministic(setup, tuned):
@@ -45,7 +45,7 @@ def test_tuned_pid_beats_the_arduino_example_gains(setup, tuned, path):
     assert best["rms_contour_um"] < untuned["rms_contour_um"]
 
 
-@pytest.mark.parametrize("kind", KINDS)
+@pytest.mark.parametrize("kind", BASELINES)
 @pytest.mark.parametrize("path", ["corner", "circle"])
 def test_each_tuned_controller_meets_its_limits_on_the_model(setup, tuned, kind, path):
     cfg, models, paths = setup

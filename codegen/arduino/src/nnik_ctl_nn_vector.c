@@ -1,0 +1,74 @@
+/* nnik_ctl_nn_vector.c - the vectorial neural controller, one online-learning 4-8-1 network on the
+ * contour error's magnitude (Python spec: nnik/implementations/servo/nn/nn_vector.py; the network:
+ * nnik_ctl_nn.h); compiled in when nnik_servo_config.h defines NNIK_CTL_NN_VECTOR.
+ *   m = isqrt(ex^2 + ey^2) (e saturated to int16);  inputs m, m - m1, m - 2 m1 + m2, |R| (the
+ *   reference >> NNIK_NN_R_SHIFT, per component saturated to int16; the octagonal estimate
+ *   max + 3/8 min of the components' magnitudes), scaled into Q3.12
+ *   learn with delta_out = the scaled m (only the Jacobian's sign), then U = the net's duty
+ *   split (OUR RECONSTRUCTION of the seed's eqs. 25-26): U_a = U (e_a / m) c_a, c_a = J_max / J_a
+ *   (Q8: NNIK_NN_CX, NNIK_NN_CY); the unit vector in Q14 from one division; m = 0: no output. */
+#include "nnik_servo_config.h"
+
+#ifdef NNIK_CTL_NN_VECTOR
+#include "nnik_ctl_nn.h"
+
+uint16_t nnik_ctl_sum = NNIK_NN_SUM_INIT; /* the weights' checksum after the last tick (or reset) */
+
+static nnik_nn_t nnik_nnv_net = {nnik_nn_w1, nnik_nn_w2, {0}, {0}, 0, 0};
+static int32_t nnik_nnv_m1, nnik_nnv_m2;
+static uint8_t nnik_nnv_primed, nnik_nnv_phase;
+
+void nnik_ctl_reset(void)
+{
+    nnik_nn_load(&nnik_nnv_net);
+    nnik_ctl_sum = NNIK_NN_SUM_INIT;
+    nnik_nnv_primed = 0;
+    nnik_nnv_phase = 0;
+}
+
+static int16_t nnik_nnv_split(int16_t u, int16_t e, int32_t inv, int16_t c)
+{
+    int16_t unit = (int16_t)(((int32_t)e * inv + (1L << 15)) >> 16); /* Q14, |e| <= m */
+    int16_t t = (int16_t)nnik_nn_asr(nnik_nn_mac(1L << 10, u, unit), 11); /* Q3 duty */
+    return nnik_ctl_duty(nnik_nn_asr(nnik_nn_mac(0, t, c), 3));
+}
+
+void nnik_ctl_tick(const int32_t ref[2], const int32_t pos[2], int16_t duty[2])
+{
+    int16_t ex = nnik_ctl_s16(ref[0] - pos[0]), ey = nnik_ctl_s16(ref[1] - pos[1]), x[NNIK_NN_IN];
+    int16_t rx = nnik_ctl_s16(ref[0] >> NNIK_NN_R_SHIFT), ry = nnik_ctl_s16(ref[1] >> NNIK_NN_R_SHIFT), lo;
+    int32_t m, m1, m2, r;
+    m = (int32_t)nnik_isqrt32((uint32_t)nnik_nn_mac(0, ex, ex) + (uint32_t)nnik_nn_mac(0, ey, ey));
+    rx = rx < 0 ? (int16_t)-rx : rx; /* |R|: max + 3/8 min (s16 saturates at -32767: no overflow) */
+    ry = ry < 0 ? (int16_t)-ry : ry;
+    if (rx < ry) {
+        lo = rx;
+        rx = ry;
+    } else {
+        lo = ry;
+    }
+    r = (int32_t)rx + ((3 * (int32_t)lo) >> 3);
+    m1 = nnik_nnv_primed ? nnik_nnv_m1 : m;
+    m2 = nnik_nnv_primed ? nnik_nnv_m2 : m1;
+    x[0] = NNIK_NN_SCALE(m, NNIK_NN_IN_SHIFT_0);
+    x[1] = NNIK_NN_SCALE(m - m1, NNIK_NN_IN_SHIFT_1);
+    x[2] = NNIK_NN_SCALE(m - 2 * m1 + m2, NNIK_NN_IN_SHIFT_2);
+    x[3] = NNIK_NN_SCALE(r, NNIK_NN_IN_SHIFT_3);
+    nnik_nnv_m2 = m1;
+    nnik_nnv_m1 = m;
+    nnik_ctl_sum = 0;
+    nnik_nnv_net.u = nnik_ctl_duty(nnik_nn_step(&nnik_nnv_net, x, x[0], nnik_nnv_phase, &nnik_ctl_sum));
+    nnik_nnv_primed = 1;
+    nnik_nnv_phase = (uint8_t)((nnik_nnv_phase + 1) & (NNIK_NN_W1_EVERY - 1));
+    if (m == 0) {
+        duty[0] = 0;
+        duty[1] = 0;
+    } else {
+        int32_t inv = (int32_t)((1UL << 30) / (uint32_t)m);
+        duty[0] = nnik_nnv_split(nnik_nnv_net.u, ex, inv, NNIK_NN_CX);
+        duty[1] = nnik_nnv_split(nnik_nnv_net.u, ey, inv, NNIK_NN_CY);
+    }
+}
+#else
+typedef int nnik_ctl_nn_vector_unused; /* not this build's controller */
+#endif

@@ -1,0 +1,33 @@
+"""The neural controllers' cycle budgets on the simulated ATmega328P (avr-gcc -Os, simavr at 16 MHz),
+issue 29 item 5: the controller's own computation (forward, backward and update, both axes, the
+harness wrapper's call included) at most 12,000 cycles a tick for nn_axes and 7,000 for nn_vector,
+worst tick over long random sequences (holds, ramps, reversals, jumps; small to saturating errors)
+with learning rates across their range, the chip bit-exact with the model all along."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from nnik.implementations.servo import make
+from nnik.implementations.servo.c_check import avr_run, model_duties, model_sums
+from tests.conftest import require_tool
+from tests.implementations.servo.nn_params import seeded_nn_params
+from tests.implementations.servo.sequences import CFG, seeded_sequence
+
+BUDGET = {"nn_axes": 12_000, "nn_vector": 7_000}
+
+
+@pytest.mark.parametrize("kind", sorted(BUDGET))
+@pytest.mark.parametrize("case", range(3))
+def test_worst_tick_within_the_budget(kind, case, tmp_path):
+    require_tool("simavr")
+    require_tool("avr-gcc")
+    ctl = make(kind, seeded_nn_params(kind, 30 + case, CFG, eta_shift=(5, 11, 19)[case]), CFG)
+    rows = seeded_sequence(40 + case)[:800]
+    res = avr_run(ctl, rows, tmp_path)
+    assert (res["duty"] == model_duties(ctl, rows)).all() and (res["sum"] == model_sums(ctl, rows)).all()
+    assert ctl.updates > 0
+    worst = int(res["cycles"].max())
+    assert worst <= BUDGET[kind], f"{kind}: worst tick {worst} cycles (budget {BUDGET[kind]})"
+    assert res["ram_bytes"] < 1024 and res["flash_bytes"] < 8192  # a quarter of the Uno's flash, half its RAM
