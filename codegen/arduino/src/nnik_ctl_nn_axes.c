@@ -16,13 +16,14 @@ uint16_t nnik_ctl_sum; /* the weights' checksum after the last tick (or reset) *
 static nnik_nn_t nnik_nna_net[2];
 static int32_t nnik_nna_e1[2], nnik_nna_e2[2];
 static int32_t nnik_nna_ring[2][NNIK_CTL_WIN]; /* ref[k - W] at nnik_nna_idx */
-static uint8_t nnik_nna_idx, nnik_nna_primed, nnik_nna_loaded;
+static uint8_t nnik_nna_idx, nnik_nna_primed, nnik_nna_loaded, nnik_nna_phase;
 
 void nnik_ctl_reset(void)
 {
     nnik_ctl_sum = (uint16_t)(nnik_nn_load(&nnik_nna_net[0], 0) + nnik_nn_load(&nnik_nna_net[1], 1));
     nnik_nna_idx = 0;
     nnik_nna_primed = 0;
+    nnik_nna_phase = 0;
     nnik_nna_loaded = 1;
 }
 
@@ -50,13 +51,14 @@ void nnik_ctl_tick(const int32_t ref[2], const int32_t pos[2], int16_t duty[2])
         x[2] = NNIK_NN_SCALE(e - 2 * e1 + e2, NNIK_NN_IN_SHIFT_2);
         x[3] = NNIK_NN_SCALE(v, NNIK_NN_IN_SHIFT_3);
         d = nnik_ctl_s16(nnik_nn_asr(nnik_nn_mac(0, x[0], a ? NNIK_NN_JY : NNIK_NN_JX), 12));
-        n->u = nnik_ctl_duty(nnik_nn_step(n, x, d, &nnik_ctl_sum));
+        n->u = nnik_ctl_duty(nnik_nn_step(n, x, d, nnik_nna_phase, &nnik_ctl_sum));
         duty[a] = n->u;
         nnik_nna_e2[a] = e1;
         nnik_nna_e1[a] = e;
     }
     nnik_nna_idx = (uint8_t)((nnik_nna_idx + 1) & (NNIK_CTL_WIN - 1));
     nnik_nna_primed = 1;
+    nnik_nna_phase = (uint8_t)((nnik_nna_phase + 1) & (NNIK_NN_W1_EVERY - 1));
 }
 #else
 typedef int nnik_ctl_nn_axes_unused; /* not this build's controller */

@@ -2,7 +2,8 @@
  * contour error's magnitude (Python spec: nnik/implementations/servo/nn/nn_vector.py; the network:
  * nnik_ctl_nn.h); compiled in when nnik_servo_config.h defines NNIK_CTL_NN_VECTOR.
  *   m = isqrt(ex^2 + ey^2) (e saturated to int16);  inputs m, m - m1, m - 2 m1 + m2, |R| (the
- *   reference >> NNIK_NN_R_SHIFT, per component saturated to int16), scaled into Q3.12
+ *   reference >> NNIK_NN_R_SHIFT, per component saturated to int16; the octagonal estimate
+ *   max + 3/8 min of the components' magnitudes), scaled into Q3.12
  *   learn with delta_out = the scaled m (only the Jacobian's sign), then U = the net's duty
  *   split (OUR RECONSTRUCTION of the seed's eqs. 25-26): U_a = U (e_a / m) c_a, c_a = J_max / J_a
  *   (Q8: NNIK_NN_CX, NNIK_NN_CY); the unit vector in Q14 from one division; m = 0: no output. */
@@ -15,12 +16,13 @@ uint16_t nnik_ctl_sum; /* the weights' checksum after the last tick (or reset) *
 
 static nnik_nn_t nnik_nnv_net;
 static int32_t nnik_nnv_m1, nnik_nnv_m2;
-static uint8_t nnik_nnv_primed, nnik_nnv_loaded;
+static uint8_t nnik_nnv_primed, nnik_nnv_loaded, nnik_nnv_phase;
 
 void nnik_ctl_reset(void)
 {
     nnik_ctl_sum = nnik_nn_load(&nnik_nnv_net, 0);
     nnik_nnv_primed = 0;
+    nnik_nnv_phase = 0;
     nnik_nnv_loaded = 1;
 }
 
@@ -34,12 +36,20 @@ static int16_t nnik_nnv_split(int16_t u, int16_t e, int32_t inv, int16_t c)
 void nnik_ctl_tick(const int32_t ref[2], const int32_t pos[2], int16_t duty[2])
 {
     int16_t ex = nnik_ctl_s16(ref[0] - pos[0]), ey = nnik_ctl_s16(ref[1] - pos[1]), x[NNIK_NN_IN];
-    int16_t rx = nnik_ctl_s16(ref[0] >> NNIK_NN_R_SHIFT), ry = nnik_ctl_s16(ref[1] >> NNIK_NN_R_SHIFT);
+    int16_t rx = nnik_ctl_s16(ref[0] >> NNIK_NN_R_SHIFT), ry = nnik_ctl_s16(ref[1] >> NNIK_NN_R_SHIFT), lo;
     int32_t m, m1, m2, r;
     if (!nnik_nnv_loaded) /* zeroed statics at power-on: start from the initial weights */
         nnik_ctl_reset();
     m = (int32_t)nnik_isqrt32((uint32_t)nnik_nn_mac(0, ex, ex) + (uint32_t)nnik_nn_mac(0, ey, ey));
-    r = (int32_t)nnik_isqrt32((uint32_t)nnik_nn_mac(0, rx, rx) + (uint32_t)nnik_nn_mac(0, ry, ry));
+    rx = rx < 0 ? (int16_t)-rx : rx; /* |R|: max + 3/8 min (s16 saturates at -32767: no overflow) */
+    ry = ry < 0 ? (int16_t)-ry : ry;
+    if (rx < ry) {
+        lo = rx;
+        rx = ry;
+    } else {
+        lo = ry;
+    }
+    r = (int32_t)rx + ((3 * (int32_t)lo) >> 3);
     m1 = nnik_nnv_primed ? nnik_nnv_m1 : m;
     m2 = nnik_nnv_primed ? nnik_nnv_m2 : m1;
     x[0] = NNIK_NN_SCALE(m, NNIK_NN_IN_SHIFT_0);
@@ -49,8 +59,9 @@ void nnik_ctl_tick(const int32_t ref[2], const int32_t pos[2], int16_t duty[2])
     nnik_nnv_m2 = m1;
     nnik_nnv_m1 = m;
     nnik_ctl_sum = 0;
-    nnik_nnv_net.u = nnik_ctl_duty(nnik_nn_step(&nnik_nnv_net, x, x[0], &nnik_ctl_sum));
+    nnik_nnv_net.u = nnik_ctl_duty(nnik_nn_step(&nnik_nnv_net, x, x[0], nnik_nnv_phase, &nnik_ctl_sum));
     nnik_nnv_primed = 1;
+    nnik_nnv_phase = (uint8_t)((nnik_nnv_phase + 1) & (NNIK_NN_W1_EVERY - 1));
     if (m == 0) {
         duty[0] = 0;
         duty[1] = 0;

@@ -27,7 +27,8 @@ def nn_params(draw, kind: str) -> dict:
     p = {"w1": [[[draw(_word(f.W1_LIM)) for _ in range(f.N_IN)] for _ in range(f.N_HID)] for _ in range(n)],
          "w2": [[draw(_word(f.W2_LIM)) for _ in range(f.N_HID)] for _ in range(n)],
          "eta_shift": draw(st.integers(0, f.ETA_MAX)), "jacobian": jac,
-         "in_shift": draw(st.lists(st.integers(-f.IN_SHIFT_MAX, f.IN_SHIFT_MAX), min_size=4, max_size=4))}
+         "in_shift": draw(st.lists(st.integers(-f.IN_SHIFT_MAX, f.IN_SHIFT_MAX), min_size=4, max_size=4)),
+         "w1_every": draw(st.sampled_from([1, 2, 4, 8]))}
     if kind == "nn_axes":
         p["win"] = draw(st.sampled_from([1, 2, 4, 8]))
     else:

@@ -26,10 +26,14 @@ class NeuralController:
         for n in self.nets:
             n.reset()
         self.counts = {"updates": 0, "clamps": 0, "held": 0}
+        self.phase = 0  # ticks since the reset mod w1_every: which hidden rows learn (params.py)
         self._reset_state()
 
     def _reset_state(self) -> None:
         raise NotImplementedError
+
+    def _learn(self, net: Net, d: int) -> None:
+        net.learn(d, self.p["eta_shift"], self.duty_max, self.counts, self.phase, self.p["w1_every"])
 
     def _inputs(self, raw: tuple[int, ...]) -> list[int]:
         return [f.scale_in(r, s) for r, s in zip(raw, self.p["in_shift"])]
@@ -59,7 +63,8 @@ class NeuralController:
     def c_defines(self) -> dict[str, int]:
         d = {f"NNIK_CTL_{self.kind.upper()}": 1, "NNIK_DUTY_MAX": self.duty_max, "NNIK_NN_NETS": len(self.nets),
              "NNIK_NN_ETA": self.p["eta_shift"], "NNIK_NN_OUT_SHIFT": self.out_shift,
-             "NNIK_NN_JX": self.p["jacobian"][0], "NNIK_NN_JY": self.p["jacobian"][1]}
+             "NNIK_NN_JX": self.p["jacobian"][0], "NNIK_NN_JY": self.p["jacobian"][1],
+             "NNIK_NN_W1_EVERY": self.p["w1_every"]}
         for i, s in enumerate(self.p["in_shift"]):
             d[f"NNIK_NN_IN_SHIFT_{i}"] = s
         return d

@@ -42,9 +42,10 @@ class Net:
         self.x, self.h = list(x), h
         return y >> out_shift
 
-    def learn(self, d: int, eta: int, duty_max: int, counts: dict) -> None:
-        """Backward with the cached forward pass and delta_out d (Q3.12); counts gains updates,
-        clamps and held."""
+    def learn(self, d: int, eta: int, duty_max: int, counts: dict, phase: int = 0, every: int = 1) -> None:
+        """Backward with the cached forward pass and delta_out d (Q3.12): the output layer's 8
+        weights, and the first-layer rows of the hidden units j with j mod every == phase (phase in
+        0 .. every - 1; every 1: all rows). counts gains updates (weights updated), clamps and held."""
         if self.x is None:
             return
         if (self.u >= duty_max and d > 0) or (self.u <= -duty_max and d < 0):
@@ -54,15 +55,17 @@ class Net:
         s1 = eta + f.W1_EXTRA
         d2 = f.rnd(d, eta & 7)
         for j in range(f.N_HID):
-            hj = self.h[j]
+            hj, w2 = self.h[j], self.w2[j]  # delta_h uses the output weight of the forward pass
+            self.w2[j] = self._clamp(w2 + f.rnd(d2 * hj, eta & ~7), f.W2_LIM, counts)
+            if (j & (every - 1)) != phase:
+                continue
             g = f.I16 - ((hj * hj) >> 15)
-            t = f.sat((d * (self.w2[j] >> 16)) >> 12, f.I16)
+            t = f.sat((d * (w2 >> 16)) >> 12, f.I16)
             dh = f.rnd((t * g) >> 15, s1 & 7)
-            self.w2[j] = self._clamp(self.w2[j] + f.rnd(d2 * hj, eta & ~7), f.W2_LIM, counts)
             row = self.w1[j]
             for i in range(f.N_IN):
                 row[i] = self._clamp(row[i] + f.rnd(dh * x[i], s1 & ~7), f.W1_LIM, counts)
-        counts["updates"] += f.N_HID * (f.N_IN + 1)
+        counts["updates"] += f.N_HID + f.N_IN * (f.N_HID // every)
 
     @staticmethod
     def _clamp(w: int, lim: int, counts: dict) -> int:

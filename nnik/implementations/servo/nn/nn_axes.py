@@ -41,10 +41,11 @@ class NnAxes(NeuralController):
             v = f.sat(r - self.hist[a].push(r)[0], E_MAX)
             x = self._inputs((e[a], e[a] - e1[a], e[a] - 2 * e1[a] + e2[a], v))
             d = f.sat((x[0] * self.p["jacobian"][a]) >> f.Q_J, f.I16)
-            net.learn(d, self.p["eta_shift"], self.duty_max, self.counts)
+            self._learn(net, d)
             net.u = fx.duty_out(net.forward(x, self.out_shift), self.duty_max)
             out.append(net.u)
         self.e2, self.e1 = e1, e
+        self.phase = (self.phase + 1) & (self.p["w1_every"] - 1)
         return out[0], out[1]
 
     def c_defines(self) -> dict[str, int]:

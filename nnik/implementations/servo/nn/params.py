@@ -11,6 +11,12 @@ truth: no float is stored. Keys:
     "win"       (optional, default 4) nn_axes: the reference speed's window in ticks (1, 2, 4, 8)
     "r_shift"   (optional, default 3) nn_vector: |R| is taken of the reference >> r_shift (each
                 component saturated to int16 first)
+    "w1_every"  (optional, default 4) 1, 2, 4 or 8 ticks: how often a hidden unit's first-layer row
+                learns. 1 is the seed's schedule (every row every tick); with N, tick k since the reset
+                updates the rows j with j mod N = k mod N (8 / N rows a tick), each row then learning
+                from every N-th tick's error. The output layer learns every tick either way. The
+                default 4 (2 rows a tick) is what fits both controllers' worst tick in the chip's
+                cycle budget (docs/closed_loop.md); 1 or 2 are there to compare against.
 
 initial_params(kind, cfg, seed, jacobian) makes a seeded random start for pretraining.
 """
@@ -26,7 +32,8 @@ from nnik.implementations.servo.nn import formats as f
 from nnik.implementations.servo.window import WINDOWS
 
 NETS = {"nn_axes": 2, "nn_vector": 1}
-OPTIONAL = {"nn_axes": {"win": 4}, "nn_vector": {"r_shift": 3}}
+OPTIONAL = {"nn_axes": {"win": 4, "w1_every": 4}, "nn_vector": {"r_shift": 3, "w1_every": 4}}
+W1_EVERY = (1, 2, 4, 8)
 REQUIRED = ("w1", "w2", "eta_shift", "jacobian", "in_shift")
 
 
@@ -61,6 +68,10 @@ def check_params(kind: str, params) -> dict:
     out["eta_shift"] = f.check_int("eta_shift", p["eta_shift"], 0, f.ETA_MAX)
     out["jacobian"] = _int_list(kind, "jacobian", p["jacobian"], 2, -f.I16, f.I16)
     out["in_shift"] = _int_list(kind, "in_shift", p["in_shift"], f.N_IN, -f.IN_SHIFT_MAX, f.IN_SHIFT_MAX)
+    if p["w1_every"] not in W1_EVERY:
+        raise NnikError(f"{kind} params: w1_every must be one of {', '.join(map(str, W1_EVERY))} ticks, "
+                        f"not {p['w1_every']!r}")
+    out["w1_every"] = int(p["w1_every"])
     if kind == "nn_axes":
         if p["win"] not in WINDOWS:
             raise NnikError(f"nn_axes params: win must be one of {', '.join(map(str, WINDOWS))} ticks, not {p['win']!r}")
