@@ -238,7 +238,7 @@ NNIK_NN_INLINE void nnik_nn_clamp_all(int32_t *w, uint8_t n, int32_t lim)
     "clr %[z]\n\tld %A[" X "], X+\n\tld %B[" X "], X+\n\t" NNIK_NN_MUL_ASM(A, X)                        \
     "ldd %A[v], Z+0\n\tldd %B[v], Z+1\n\tldd %C[v], Z+2\n\tldd %D[v], Z+3\n\t"                          \
     "sbrc %D[acc], 7\n\tcom %[z]\n\t" ADD                                                              \
-    "std Z+0, %A[v]\n\tstd Z+1, %B[v]\n\tstd Z+2, %C[v]\n\tstd Z+3, %D[v]\n\tadiw r30, 4\n\t"            \
+    "st Z+, %A[v]\n\tst Z+, %B[v]\n\tst Z+, %C[v]\n\tst Z+, %D[v]\n\t"                                   \
     "mov %[z], %D[v]\n\tlsl %[z]\n\teor %[z], %D[v]\n\tor %[f], %[z]\n\t"
 #define NNIK_NN_UPD_STEP(ADD) NNIK_NN_UPD_STEP_AX(ADD, "a", "x")
 #define NNIK_NN_UPD_OPERANDS                                                                         \
