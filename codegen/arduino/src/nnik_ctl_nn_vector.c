@@ -26,6 +26,26 @@ void nnik_ctl_reset(void)
     nnik_nnv_phase = 0;
 }
 
+/* floor(sqrt(v)) for v < 2^31 (nnik_isqrt32's value), the root's bits from the top: its high byte
+ * from v's top half by 8 x 8 squares, its low byte by 16 x 16 squares (8 steps each, no loop over
+ * 32-bit shifts) */
+static uint16_t nnik_nnv_isqrt(uint32_t v)
+{
+    uint16_t top = (uint16_t)(v >> 16), t;
+    uint8_t hi = 0, lo = 0, bit;
+    for (bit = 0x80; bit; bit >>= 1) {
+        uint8_t h = (uint8_t)(hi | bit);
+        if ((uint16_t)((uint16_t)h * h) <= top)
+            hi = h;
+    }
+    for (bit = 0x80; bit; bit >>= 1) {
+        t = (uint16_t)(((uint16_t)hi << 8) | (uint8_t)(lo | bit));
+        if ((uint32_t)t * t <= v)
+            lo = (uint8_t)(lo | bit);
+    }
+    return (uint16_t)(((uint16_t)hi << 8) | lo);
+}
+
 static int16_t nnik_nnv_split(int16_t u, int16_t e, int32_t inv, int16_t c)
 {
     int16_t unit = (int16_t)(((int32_t)e * inv + (1L << 15)) >> 16); /* Q14, |e| <= m */
@@ -38,7 +58,7 @@ void nnik_ctl_tick(const int32_t ref[2], const int32_t pos[2], int16_t duty[2])
     int16_t ex = nnik_ctl_s16(ref[0] - pos[0]), ey = nnik_ctl_s16(ref[1] - pos[1]), x[NNIK_NN_IN];
     int16_t rx = nnik_ctl_s16(ref[0] >> NNIK_NN_R_SHIFT), ry = nnik_ctl_s16(ref[1] >> NNIK_NN_R_SHIFT), lo;
     int32_t m, m1, m2, r;
-    m = (int32_t)nnik_isqrt32((uint32_t)nnik_nn_mac(0, ex, ex) + (uint32_t)nnik_nn_mac(0, ey, ey));
+    m = (int32_t)nnik_nnv_isqrt((uint32_t)nnik_nn_mac(0, ex, ex) + (uint32_t)nnik_nn_mac(0, ey, ey));
     rx = rx < 0 ? (int16_t)-rx : rx; /* |R|: max + 3/8 min (s16 saturates at -32767: no overflow) */
     ry = ry < 0 ? (int16_t)-ry : ry;
     if (rx < ry) {
