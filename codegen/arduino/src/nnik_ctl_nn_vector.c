@@ -26,6 +26,44 @@ void nnik_ctl_reset(void)
     nnik_nnv_phase = 0;
 }
 
+/* t * t (unsigned) and e * b (signed by unsigned), 16 x 16 -> 32: on the AVR inline products
+ * (libgcc's are calls); the same values everywhere */
+#if defined(__GNUC__) && defined(__AVR__)
+static inline __attribute__((always_inline)) uint32_t nnik_nnv_sq(uint16_t t)
+{
+    uint32_t p;
+    uint8_t z;
+    __asm__("clr %[z]\n\tmul %B[t], %B[t]\n\tmovw %C[p], r0\n\tmul %A[t], %A[t]\n\tmovw %A[p], r0\n\t"
+            "mul %A[t], %B[t]\n\tadd %B[p], r0\n\tadc %C[p], r1\n\tadc %D[p], %[z]\n\t"
+            "add %B[p], r0\n\tadc %C[p], r1\n\tadc %D[p], %[z]\n\tclr __zero_reg__"
+            : [p] "=&r"(p), [z] "=&r"(z)
+            : [t] "r"(t));
+    return p;
+}
+
+static inline __attribute__((always_inline)) int32_t nnik_nnv_mulsu(int16_t e, uint16_t b)
+{
+    int32_t p;
+    uint8_t z;
+    __asm__("clr %[z]\n\tmulsu %B[e], %B[b]\n\tmovw %C[p], r0\n\tmul %A[e], %A[b]\n\tmovw %A[p], r0\n\t"
+            "mulsu %B[e], %A[b]\n\tsbc %D[p], %[z]\n\tadd %B[p], r0\n\tadc %C[p], r1\n\tadc %D[p], %[z]\n\t"
+            "mul %B[b], %A[e]\n\tadd %B[p], r0\n\tadc %C[p], r1\n\tadc %D[p], %[z]\n\tclr __zero_reg__"
+            : [p] "=&r"(p), [z] "=&r"(z)
+            : [e] "a"(e), [b] "a"(b));
+    return p;
+}
+#else
+static uint32_t nnik_nnv_sq(uint16_t t)
+{
+    return (uint32_t)t * t;
+}
+
+static int32_t nnik_nnv_mulsu(int16_t e, uint16_t b)
+{
+    return (int32_t)e * (int32_t)b;
+}
+#endif
+
 /* floor(sqrt(v)) for v < 2^31 (nnik_isqrt32's value), the root's bits from the top: its high byte
  * from v's top half by 8 x 8 squares, its low byte by 16 x 16 squares (8 steps each, no loop over
  * 32-bit shifts) */
@@ -40,7 +78,7 @@ static uint16_t nnik_nnv_isqrt(uint32_t v)
     }
     for (bit = 0x80; bit; bit >>= 1) {
         t = (uint16_t)(((uint16_t)hi << 8) | (uint8_t)(lo | bit));
-        if ((uint32_t)t * t <= v)
+        if (nnik_nnv_sq(t) <= v)
             lo = (uint8_t)(lo | bit);
     }
     return (uint16_t)(((uint16_t)hi << 8) | lo);
@@ -87,7 +125,10 @@ static uint32_t nnik_nnv_inv(uint16_t m)
 
 static int16_t nnik_nnv_split(int16_t u, int16_t e, int32_t inv, int16_t c)
 {
-    int16_t unit = (int16_t)(((int32_t)e * inv + (1L << 15)) >> 16); /* Q14, |e| <= m */
+    /* unit = (e inv + 2^15) >> 16 (Q14, |e| <= m) by the halves of inv (0 .. 2^30): e (inv >> 16) +
+     * the rounded top half of e (inv & 0xFFFF), mod 2^16 (unsigned: no overflow) */
+    int16_t unit = (int16_t)(uint16_t)((uint16_t)e * (uint16_t)(inv >> 16) +
+                                       (uint16_t)((nnik_nnv_mulsu(e, (uint16_t)inv) + (1L << 15)) >> 16));
     int16_t t = (int16_t)nnik_nn_asr(nnik_nn_mac(1L << 10, u, unit), 11); /* Q3 duty */
     return nnik_ctl_duty(nnik_nn_asr(nnik_nn_mac(0, t, c), 3));
 }
