@@ -194,8 +194,8 @@ NNIK_NN_INLINE int32_t nnik_nn_dot(const int32_t *wp, const int16_t *xp, uint16_
  * the AVR one unrolled inline block: per word the product (AVR201), the byte shift by register
  * choice (NNIK_NN_ADD_<q>), and the top bits compared to flag a word that may need the clamp (bits
  * 31 and 30 differ: beyond +-2^30; bits 31, 30, 29 differ: beyond +-2^29).  Elsewhere plain C.  The
- * same values everywhere.  nnik_nn_row: a hidden unit's 4 first-layer words (rate NNIK_NN_S1);
- * nnik_nn_out: the 8 output weights (rate NNIK_NN_S2). */
+ * same values everywhere.  nnik_nn_unit: a hidden unit's delta and its 4 first-layer words (rate
+ * NNIK_NN_S1; nnik_nn_row on the host); nnik_nn_out: the 8 output weights (rate NNIK_NN_S2). */
 NNIK_NN_INLINE void nnik_nn_clamp_all(int32_t *w, uint8_t n, int32_t lim)
 {
     uint8_t i;
@@ -250,16 +250,6 @@ NNIK_NN_INLINE void nnik_nn_clamp_all(int32_t *w, uint8_t n, int32_t lim)
     int16_t xv;                                                                                      \
     uint8_t flag, z
 
-NNIK_NN_INLINE void nnik_nn_row(int32_t *w, int16_t a, const int16_t *x)
-{
-    NNIK_NN_UPD_LOCALS;
-    __asm__("clr %[f]\n\t" NNIK_NN_UPD_STEP(NNIK_NN_ADD_W1) NNIK_NN_UPD_STEP(NNIK_NN_ADD_W1)
-                NNIK_NN_UPD_STEP(NNIK_NN_ADD_W1) NNIK_NN_UPD_STEP(NNIK_NN_ADD_W1) "clr __zero_reg__"
-                NNIK_NN_UPD_OPERANDS);
-    if (flag & 0x80)
-        nnik_nn_clamp_all(w, NNIK_NN_IN, NNIK_NN_W1_LIM);
-}
-
 /* OUT (int16, in r16..r31) = sat16(acc >> 12) (nnik_nn_sat12's value): the top 3 bytes of acc
  * (destroyed) shifted 4 bits fit when the top byte is the sign of the next; S a scratch register */
 #define NNIK_NN_SAT12_ASM(OUT, S)                                                                      \
@@ -280,10 +270,10 @@ NNIK_NN_INLINE int16_t nnik_nn_act(int32_t acc)
     return nnik_tanh(r);
 }
 
-/* One hidden unit's learning on the AVR in one inline block: its delta from its cached output h,
- * its output weight's top half w2 and delta_out d (as the C of nnik_nn_delta), then its 4 first-layer
- * words (nnik_nn_row).  g = 32767 - (h h >> 15) is 0x7FFF XOR (h h >> 15); t = sat16(d w2 >> 12) from
- * the product's top 3 bytes shifted 4 bits (it fits when the top byte is the sign of the next);
+/* One hidden unit's learning on the AVR in one inline block (the host's nnik_nn_unit, the same
+ * values): its delta from its cached output h, its output weight's top half w2 and delta_out d, then
+ * its 4 first-layer words.  g = 32767 - (h h >> 15) is 0x7FFF XOR (h h >> 15); t = sat16(d w2 >> 12)
+ * from the product's top 3 bytes shifted 4 bits (it fits when the top byte is the sign of the next);
  * dh = (t g >> 15) shifted right S1 & 7 bits, the last bit out (carry) added: rounding half up. */
 NNIK_NN_INLINE void nnik_nn_unit(int32_t *w, int16_t h, int16_t w2, int16_t d, const int16_t *x)
 {
@@ -295,7 +285,8 @@ NNIK_NN_INLINE void nnik_nn_unit(int32_t *w, int16_t h, int16_t w2, int16_t d, c
             NNIK_NN_MUL_ASM("d", "w")
             NNIK_NN_SAT12_ASM("w", "f") NNIK_NN_MUL_ASM("w", "h")
             "lsl %B[acc]\n\trol %C[acc]\n\trol %D[acc]\n\t"
-            ".if %[r]\n\t.rept %[r]\n\tasr %D[acc]\n\tror %C[acc]\n\t.endr\n\tadc %C[acc], %[z]\n\tadc %D[acc], %[z]\n\t.endif\n\t"
+            ".if %[r]\n\t.rept %[r]\n\tasr %D[acc]\n\tror %C[acc]\n\t.endr\n\t"
+            "adc %C[acc], %[z]\n\tadc %D[acc], %[z]\n\t.endif\n\t"
             "mov %A[h], %C[acc]\n\tmov %B[h], %D[acc]\n\tclr %[f]\n\t"
             NNIK_NN_UPD_STEP_AX(NNIK_NN_ADD_W1, "h", "d") NNIK_NN_UPD_STEP_AX(NNIK_NN_ADD_W1, "h", "d")
             NNIK_NN_UPD_STEP_AX(NNIK_NN_ADD_W1, "h", "d") NNIK_NN_UPD_STEP_AX(NNIK_NN_ADD_W1, "h", "d")
