@@ -194,8 +194,8 @@ NNIK_NN_INLINE int32_t nnik_nn_dot(const int32_t *wp, const int16_t *xp, uint16_
  * the AVR one unrolled inline block: per word the product (AVR201), the byte shift by register
  * choice (NNIK_NN_ADD_<q>), and the top bits compared to flag a word that may need the clamp (bits
  * 31 and 30 differ: beyond +-2^30; bits 31, 30, 29 differ: beyond +-2^29).  Elsewhere plain C.  The
- * same values everywhere.  nnik_nn_row: a hidden unit's 4 first-layer words (rate NNIK_NN_S1);
- * nnik_nn_out: the 8 output weights (rate NNIK_NN_S2). */
+ * same values everywhere.  nnik_nn_unit: a hidden unit's delta and its 4 first-layer words (rate
+ * NNIK_NN_S1; nnik_nn_row on the host); nnik_nn_out: the 8 output weights (rate NNIK_NN_S2). */
 NNIK_NN_INLINE void nnik_nn_clamp_all(int32_t *w, uint8_t n, int32_t lim)
 {
     uint8_t i;
@@ -238,7 +238,7 @@ NNIK_NN_INLINE void nnik_nn_clamp_all(int32_t *w, uint8_t n, int32_t lim)
     "clr %[z]\n\tld %A[" X "], X+\n\tld %B[" X "], X+\n\t" NNIK_NN_MUL_ASM(A, X)                        \
     "ldd %A[v], Z+0\n\tldd %B[v], Z+1\n\tldd %C[v], Z+2\n\tldd %D[v], Z+3\n\t"                          \
     "sbrc %D[acc], 7\n\tcom %[z]\n\t" ADD                                                              \
-    "std Z+0, %A[v]\n\tstd Z+1, %B[v]\n\tstd Z+2, %C[v]\n\tstd Z+3, %D[v]\n\tadiw r30, 4\n\t"            \
+    "st Z+, %A[v]\n\tst Z+, %B[v]\n\tst Z+, %C[v]\n\tst Z+, %D[v]\n\t"                                   \
     "mov %[z], %D[v]\n\tlsl %[z]\n\teor %[z], %D[v]\n\tor %[f], %[z]\n\t"
 #define NNIK_NN_UPD_STEP(ADD) NNIK_NN_UPD_STEP_AX(ADD, "a", "x")
 #define NNIK_NN_UPD_OPERANDS                                                                         \
@@ -250,20 +250,30 @@ NNIK_NN_INLINE void nnik_nn_clamp_all(int32_t *w, uint8_t n, int32_t lim)
     int16_t xv;                                                                                      \
     uint8_t flag, z
 
-NNIK_NN_INLINE void nnik_nn_row(int32_t *w, int16_t a, const int16_t *x)
+/* OUT (int16, in r16..r31) = sat16(acc >> 12) (nnik_nn_sat12's value): the top 3 bytes of acc
+ * (destroyed) shifted 4 bits fit when the top byte is the sign of the next; S a scratch register */
+#define NNIK_NN_SAT12_ASM(OUT, S)                                                                      \
+    ".rept 4\n\tasr %D[acc]\n\tror %C[acc]\n\tror %B[acc]\n\t.endr\n\t"                                \
+    "mov %[" S "], %C[acc]\n\tlsl %[" S "]\n\tsbc %[" S "], %[" S "]\n\tcp %[" S "], %D[acc]\n\tbrne 2f\n\t"     \
+    "mov %A[" OUT "], %B[acc]\n\tmov %B[" OUT "], %C[acc]\n\tcpi %A[" OUT "], 0\n\tbrne 3f\n\t"               \
+    "cpi %B[" OUT "], 0x80\n\tbrne 3f\n\tldi %A[" OUT "], 1\n\trjmp 3f\n"                                   \
+    "2:\n\tldi %A[" OUT "], 0xFF\n\tldi %B[" OUT "], 0x7F\n\tsbrs %D[acc], 7\n\trjmp 3f\n\t"                 \
+    "ldi %A[" OUT "], 0x01\n\tldi %B[" OUT "], 0x80\n"                                                  \
+    "3:\n\t"
+
+/* tanh of a hidden sum: nnik_tanh(nnik_nn_sat12(a)), the saturation in an inline block */
+NNIK_NN_INLINE int16_t nnik_nn_act(int32_t acc)
 {
-    NNIK_NN_UPD_LOCALS;
-    __asm__("clr %[f]\n\t" NNIK_NN_UPD_STEP(NNIK_NN_ADD_W1) NNIK_NN_UPD_STEP(NNIK_NN_ADD_W1)
-                NNIK_NN_UPD_STEP(NNIK_NN_ADD_W1) NNIK_NN_UPD_STEP(NNIK_NN_ADD_W1) "clr __zero_reg__"
-                NNIK_NN_UPD_OPERANDS);
-    if (flag & 0x80)
-        nnik_nn_clamp_all(w, NNIK_NN_IN, NNIK_NN_W1_LIM);
+    int16_t r;
+    uint8_t s;
+    __asm__(NNIK_NN_SAT12_ASM("r", "s") : [acc] "+r"(acc), [r] "=&d"(r), [s] "=&r"(s));
+    return nnik_tanh(r);
 }
 
-/* One hidden unit's learning on the AVR in one inline block: its delta from its cached output h,
- * its output weight's top half w2 and delta_out d (as the C of nnik_nn_delta), then its 4 first-layer
- * words (nnik_nn_row).  g = 32767 - (h h >> 15) is 0x7FFF XOR (h h >> 15); t = sat16(d w2 >> 12) from
- * the product's top 3 bytes shifted 4 bits (it fits when the top byte is the sign of the next);
+/* One hidden unit's learning on the AVR in one inline block (the host's nnik_nn_unit, the same
+ * values): its delta from its cached output h, its output weight's top half w2 and delta_out d, then
+ * its 4 first-layer words.  g = 32767 - (h h >> 15) is 0x7FFF XOR (h h >> 15); t = sat16(d w2 >> 12)
+ * from the product's top 3 bytes shifted 4 bits (it fits when the top byte is the sign of the next);
  * dh = (t g >> 15) shifted right S1 & 7 bits, the last bit out (carry) added: rounding half up. */
 NNIK_NN_INLINE void nnik_nn_unit(int32_t *w, int16_t h, int16_t w2, int16_t d, const int16_t *x)
 {
@@ -273,14 +283,10 @@ NNIK_NN_INLINE void nnik_nn_unit(int32_t *w, int16_t h, int16_t w2, int16_t d, c
             "lsl %B[acc]\n\trol %C[acc]\n\trol %D[acc]\n\t"
             "mov %A[h], %C[acc]\n\tcom %A[h]\n\tmov %B[h], %D[acc]\n\tcom %B[h]\n\tsubi %B[h], 0x80\n\t"
             NNIK_NN_MUL_ASM("d", "w")
-            ".rept 4\n\tasr %D[acc]\n\tror %C[acc]\n\tror %B[acc]\n\t.endr\n\t"
-            "mov %[f], %C[acc]\n\tlsl %[f]\n\tsbc %[f], %[f]\n\tcp %[f], %D[acc]\n\tbrne 2f\n\t"
-            "mov %A[w], %B[acc]\n\tmov %B[w], %C[acc]\n\tcpi %A[w], 0\n\tbrne 3f\n\tcpi %B[w], 0x80\n\tbrne 3f\n\t"
-            "ldi %A[w], 1\n\trjmp 3f\n"
-            "2:\n\tldi %A[w], 0xFF\n\tldi %B[w], 0x7F\n\tsbrs %D[acc], 7\n\trjmp 3f\n\tldi %A[w], 0x01\n\tldi %B[w], 0x80\n"
-            "3:\n\t" NNIK_NN_MUL_ASM("w", "h")
+            NNIK_NN_SAT12_ASM("w", "f") NNIK_NN_MUL_ASM("w", "h")
             "lsl %B[acc]\n\trol %C[acc]\n\trol %D[acc]\n\t"
-            ".if %[r]\n\t.rept %[r]\n\tasr %D[acc]\n\tror %C[acc]\n\t.endr\n\tadc %C[acc], %[z]\n\tadc %D[acc], %[z]\n\t.endif\n\t"
+            ".if %[r]\n\t.rept %[r]\n\tasr %D[acc]\n\tror %C[acc]\n\t.endr\n\t"
+            "adc %C[acc], %[z]\n\tadc %D[acc], %[z]\n\t.endif\n\t"
             "mov %A[h], %C[acc]\n\tmov %B[h], %D[acc]\n\tclr %[f]\n\t"
             NNIK_NN_UPD_STEP_AX(NNIK_NN_ADD_W1, "h", "d") NNIK_NN_UPD_STEP_AX(NNIK_NN_ADD_W1, "h", "d")
             NNIK_NN_UPD_STEP_AX(NNIK_NN_ADD_W1, "h", "d") NNIK_NN_UPD_STEP_AX(NNIK_NN_ADD_W1, "h", "d")
@@ -309,6 +315,11 @@ NNIK_NN_INLINE void nnik_nn_row(int32_t *w, int16_t a, const int16_t *x)
     uint8_t i;
     for (i = 0; i < NNIK_NN_IN; i++)
         w[i] = nnik_nn_update(w[i], a, x[i], NNIK_NN_S1, NNIK_NN_W1_LIM);
+}
+
+NNIK_NN_INLINE int16_t nnik_nn_act(int32_t a)
+{
+    return nnik_tanh(nnik_nn_sat12(a));
 }
 
 NNIK_NN_INLINE void nnik_nn_unit(int32_t *w, int16_t h, int16_t w2, int16_t d, const int16_t *x)
@@ -371,7 +382,7 @@ static int32_t nnik_nn_step(nnik_nn_t *n, const int16_t x[NNIK_NN_IN], int16_t d
     w = n->w1;
     for (j = 0; j < NNIK_NN_HID; j++, w += NNIK_NN_IN) {
         int32_t a = nnik_nn_dot(w, x, &s);
-        int16_t h = nnik_tanh(nnik_nn_sat12(a));
+        int16_t h = nnik_nn_act(a);
         n->h[j] = h;
         y = nnik_nn_mac(y, (int16_t)(n->w2[j] >> 16), h);
         s += (uint16_t)n->w2[j];

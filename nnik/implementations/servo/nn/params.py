@@ -11,14 +11,14 @@ truth: no float is stored. Keys:
     "win"       (optional, default 4) nn_axes: the reference speed's window in ticks (1, 2, 4, 8)
     "r_shift"   (optional, default 3) nn_vector: |R| is taken of the reference >> r_shift (each
                 component saturated to int16 first)
-    "w1_every"  (optional; default 4 for nn_axes, 8 for nn_vector) 1, 2, 4 or 8 ticks: how often a
-                hidden unit's first-layer row learns. 1 is the seed's schedule (every row every tick);
-                with N, tick k since the reset updates the rows j with j mod N = k mod N (8 / N rows a
-                tick), each row then learning from every N-th tick's error. The output layer learns
-                every tick either way. The defaults are the most learning whose worst tick fits the
-                chip's cycle budget (nn_axes 12,000, nn_vector 7,000 cycles: the vector's polar form
-                spends about 1,400 cycles on its square root and its division); 1 and 2 are there to
-                compare against.
+    "w1_every"  (optional, default 2) 1, 2, 4 or 8 ticks: how often a hidden unit's first-layer row
+                learns. 1 is the seed's schedule (every row every tick); with N, tick k since the reset
+                updates the rows j with j mod N = k mod N (8 / N rows a tick), each row then learning
+                from every N-th tick's error. The output layer learns every tick either way. The
+                default is the most learning whose worst tick fits the chip's cycle budget (nn_axes
+                12,000, nn_vector 7,000 cycles) with a margin: measured on simavr, worst tick over long
+                random runs, about 11,200 and 6,750 cycles at 2, 13,900 and 8,150 at 1 (the seed's
+                schedule does not fit); 4 and 8 learn less for fewer cycles.
 
 initial_params(kind, cfg, seed, jacobian) makes a seeded random start for pretraining.
 """
@@ -34,7 +34,7 @@ from nnik.implementations.servo.nn import formats as f
 from nnik.implementations.servo.window import WINDOWS
 
 NETS = {"nn_axes": 2, "nn_vector": 1}
-OPTIONAL = {"nn_axes": {"win": 4, "w1_every": 4}, "nn_vector": {"r_shift": 3, "w1_every": 8}}
+OPTIONAL = {"nn_axes": {"win": 4, "w1_every": 2}, "nn_vector": {"r_shift": 3, "w1_every": 2}}
 W1_EVERY = (1, 2, 4, 8)
 REQUIRED = ("w1", "w2", "eta_shift", "jacobian", "in_shift")
 
