@@ -19,7 +19,7 @@ import pytest
 
 from tests.docs.pages import LANGUAGES, blocks, commands, fresh_copy, pages, shown_failures, shown_nnik_commands
 
-SHARED = {"nnik run datasets/galvo_cba2012.toml": "build/galvo_cba2012"}
+SHARED = {"nnik run datasets/galvo_cba2012.toml": "build/galvo_cba2012", "nnik run datasets/xy_table.toml": "build/xy_table"}
 TIMEOUT_S = 1200
 
 

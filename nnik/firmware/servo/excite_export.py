@@ -27,6 +27,7 @@ from nnik.errors import NnikError
 from nnik.firmware.arduino import homepage
 from nnik.firmware.servo.build import SRC, copy_runtime, tick_ocr1a
 from nnik.firmware.servo.export import write_library_files
+from nnik.implementations.servo.base import FixedGains
 
 VERSION = "0.1.0"
 HEADER = "t,u_x,u_y,count_x,count_y"
@@ -64,8 +65,9 @@ def serial_log(duty, counts, tick_s: float, duty_max: int, lost: int = 0) -> str
     return "\n".join([HEADER, *rows, end]) + "\n"
 
 
-class TablePlayer:
-    """The firmware's Python model (the nnik_ctl interface): duty[k] at tick k, then 0."""
+class TablePlayer(FixedGains):
+    """The firmware's Python model (the nnik_ctl interface): duty[k] at tick k, then 0; no weights
+    (checksum 0)."""
 
     kind = "excite"
 
