@@ -6,6 +6,7 @@ commit leaves the output directory exactly as it was."""
 from __future__ import annotations
 
 import os
+import secrets
 import shutil
 import signal
 import sys
@@ -31,19 +32,36 @@ def held_interrupt():
 
 
 @contextmanager
-def temporary_folder(make):
-    """The folder make() creates, removed however the block ends. It is made with Ctrl-C held, so
-    an interrupt lands either before it exists or once its removal is already promised (a
-    SIGINT between the mkdir and the try used to leave it behind)."""
+def temporary_folder(parent: Path, prefix: str, mode: int = 0o777):
+    """A new empty folder parent/prefixXXXXXXXX (mode as mkdir takes it: the umask applies), removed
+    however the block ends. A Ctrl-C cannot leave it behind: its name is held before the mkdir (an
+    interrupt that Python raises just after the mkdir still finds it; tempfile.mkdtemp could be cut
+    between its mkdir and its return), and the removal starts again if an interrupt cuts it, the
+    interrupt raised once the folder is gone."""
+    parent = Path(parent)
+    parent.mkdir(parents=True, exist_ok=True)
     path = None
     try:
-        with held_interrupt():
-            path = make()
+        for _ in range(100):
+            name = parent / f"{prefix}{secrets.token_hex(4)}"
+            if not name.exists():
+                path = name
+                os.mkdir(path, mode)
+                break
+        else:
+            raise FileExistsError(f"no free name {prefix}* in {parent}")
         yield path
     finally:
-        if path is not None:
-            with held_interrupt():
-                shutil.rmtree(path, ignore_errors=True)
+        interrupted = False
+        while True:
+            try:
+                if path is not None:
+                    shutil.rmtree(path, ignore_errors=True)
+                break
+            except KeyboardInterrupt:
+                interrupted = True
+        if interrupted:
+            raise KeyboardInterrupt
 
 
 def reraise_lost_interrupts() -> None:
@@ -128,7 +146,7 @@ class Staged:
 
     def commit(self) -> list[Path]:
         self.root.mkdir(parents=True, exist_ok=True)
-        with temporary_folder(lambda: Path(tempfile.mkdtemp(prefix=".staging-", dir=self.root))) as tmp:
+        with temporary_folder(self.root, ".staging-", 0o700) as tmp:
             for rel, data in self.files.items():
                 p = tmp / rel
                 p.parent.mkdir(parents=True, exist_ok=True)

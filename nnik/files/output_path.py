@@ -52,17 +52,6 @@ def check_output_file(path: Path, inputs=(), what: str = "the output file") -> P
     return path
 
 
-def staging_dir(dest: Path) -> Path:
-    """A new empty directory beside ``dest`` (the same file system, so it can be renamed onto it)."""
-    dest = Path(dest)
-    dest.parent.mkdir(parents=True, exist_ok=True)
-    d = Path(tempfile.mkdtemp(prefix=f".{dest.name}.staging-", dir=dest.parent))
-    mask = os.umask(0o22)
-    os.umask(mask)
-    d.chmod(0o777 & ~mask)  # as a plain mkdir would make it (mkdtemp's is private)
-    return d
-
-
 _RENAME_EXCHANGE = 2
 _AT_FDCWD = -100
 

@@ -11,7 +11,7 @@ from pathlib import Path
 
 from nnik.errors import NnikError
 from nnik.files.atomic_write import temporary_folder
-from nnik.files.output_path import parent_ok, replace_dir, staging_dir
+from nnik.files.output_path import parent_ok, replace_dir
 
 
 def check_replaceable(dest: Path, marker: str, what: str) -> None:
@@ -32,7 +32,7 @@ def staged_folder(dest: Path, marker: str, what: str, stamp: str):
     holding `stamp`); on failure dest is as it was."""
     dest = Path(dest)
     check_replaceable(dest, marker, what)
-    with temporary_folder(lambda: staging_dir(dest)) as tmp:
+    with temporary_folder(dest.parent, f".{dest.name}.staging-") as tmp:
         yield tmp
         (tmp / marker).write_text(stamp)
         replace_dir(tmp, dest)

@@ -6,7 +6,6 @@ import os
 from pathlib import Path
 
 from nnik.files.atomic_write import fsync_dir, held_interrupt, temporary_folder
-from nnik.files.output_path import staging_dir
 
 from nnik.report import (accuracy, files, implementations, jobs, reference, references, scenario, search_front, summary,
                          tanh, targets, training, verification)
@@ -40,7 +39,7 @@ def write_report(model_dir: Path, out_dir: Path | None = None) -> Path:
     out_dir.mkdir(parents=True, exist_ok=True)
     # built whole in a folder beside, then moved in file by file (pictures first, index.html last):
     # a full disk or a kill while building leaves the earlier report as it was
-    with temporary_folder(lambda: staging_dir(out_dir)) as stage:
+    with temporary_folder(out_dir.parent, f".{out_dir.name}.staging-") as stage:
         sections = build_sections(inp, stage)
         (stage / "report.md").write_text(render_markdown(sections, inp.metrics), encoding="utf-8")
         (stage / "index.html").write_text(render_html(sections, inp.metrics), encoding="utf-8")
