@@ -36,7 +36,7 @@ from pathlib import Path
 import numpy as np
 
 from nnik.errors import NnikError
-from nnik.files.atomic_write import write_file_atomic
+from nnik.files.atomic_write import replacing, write_file_atomic
 from nnik.implementations.servo import BASELINES, NEURAL, make
 from nnik.job.servo_loop import DIVERGED_CLAMP_FRACTION as DIVERGED_CLAMP_SHARE  # clamps > 1 % of updates
 
@@ -252,8 +252,7 @@ def learning_curve(path: Path, title: str, by_plant: dict, tick_s: float) -> Pat
     fig.suptitle(title, fontsize=10)
     fig.tight_layout()
     path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(path.name + ".tmp.png")
-    fig.savefig(tmp, dpi=80)
+    with replacing(path) as tmp:
+        fig.savefig(tmp, dpi=80)
     plt.close(fig)
-    tmp.replace(path)
     return path

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
-from nnik.files.atomic_write import write_file_atomic
+from nnik.files.atomic_write import replacing, write_file_atomic
 
 
 def picture(path: Path, title: str, ref_um: np.ndarray, table_um: np.ndarray, contour: np.ndarray, duty: np.ndarray,
@@ -34,10 +34,9 @@ def picture(path: Path, title: str, ref_um: np.ndarray, table_um: np.ndarray, co
     fig.suptitle(title, fontsize=10)
     fig.tight_layout()
     path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(path.name + ".tmp.png")
-    fig.savefig(tmp, dpi=90)
+    with replacing(path) as tmp:
+        fig.savefig(tmp, dpi=90)
     plt.close(fig)
-    tmp.replace(path)
     return str(path)
 
 
