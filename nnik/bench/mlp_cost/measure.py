@@ -120,8 +120,8 @@ def measure_kernel(prof: str, kern: str | None, wd: Path, say, jobs: int | None 
     from concurrent.futures import ThreadPoolExecutor
 
     kkey = kernel_key(kern)
-    specs = calibration_specs(kern)
     target = BUILTIN_PROFILES[prof]["target"]
+    specs = calibration_specs(kern, target=target)
     jobs = jobs or max(1, min(4, os.cpu_count() or 1))
 
     def one(i: int, sp: CalSpec):

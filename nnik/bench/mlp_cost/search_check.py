@@ -19,30 +19,13 @@ from pathlib import Path
 import numpy as np
 
 from nnik.implementations.mlp.cost.calibrations import BUILTIN_PROFILES, REPO_ROOT, cal_path, forget_loaded
-from nnik.implementations.mlp.cost.synthetic import SEARCH_TANHS as TANHS
-from nnik.implementations.mlp.cost.synthetic import CalSpec
+from nnik.implementations.mlp.cost.synthetic import SEARCH_TANHS as TANHS  # noqa: F401 - re-exported
+from nnik.implementations.mlp.cost.synthetic import SEARCH_WIDTHS as WIDTHS  # noqa: F401 - re-exported
+from nnik.implementations.mlp.cost.synthetic import CalSpec, draw_specs  # noqa: F401 - draw_specs re-exported
 
 CHECK_DIR = REPO_ROOT / "build" / "estimator_search_check"
-WIDTHS = (3, 4, 5, 6, 8, 10, 12)  # nnik.search.space.MLP_WIDTHS (not imported: estimate stays below search)
 MARGIN_PCT = 0.5  # added to the worst error seen, for the architectures no check has drawn
 KERNEL = "fast"
-
-
-def draw_specs(n: int, seed: int, depths: tuple[int, ...] = (1, 2), tanhs: tuple[str, ...] = TANHS,
-               widths: tuple[int, ...] = WIDTHS) -> list[CalSpec]:
-    """n random MLPs of the search space (seeded): depth, widths, full (galvo), residual (corexy)
-    or residual with a DAC clamp (dual), the tanh replacement, weight bits; weights as small as
-    trained networks' (gain 0.35-1.0)."""
-    rng = np.random.default_rng(seed)
-    out = []
-    for i in range(n):
-        depth = int(rng.choice(depths))
-        hidden = tuple(int(rng.choice(widths)) for _ in range(depth))
-        scenario = ("galvo", "corexy", "dual")[int(rng.integers(0, 3))]
-        out.append(CalSpec(scenario, hidden, tanh=str(rng.choice(tanhs)),
-                           weight_bits=int(rng.choice((8, 16))), seed=int(rng.integers(1, 10**6)),
-                           gain=float(rng.uniform(0.35, 1.0))))
-    return out
 
 
 def check(specs: list[CalSpec], profiles: list[str], n_vec: int = 60, workdir: Path = CHECK_DIR,

@@ -98,7 +98,7 @@ def _fast_counts(im, target: str | None) -> tuple[str, dict[str, float]]:
     e = 15 + int(o.g) - int(o.F)
     fold = e == 0 and not o.residual
     n_out = s["n_out"]
-    if path != "asm" or not _asm_output_terms(c, im, n_out):
+    if path != "asm" or not _asm_output_terms(c, im, n_out, target):
         _c_affine_terms(c, im, n_out)
     c["out_fold"] = float(n_out * fold)
     c["out_plain"] = float(n_out * (not fold))
@@ -128,7 +128,7 @@ def _c_affine_terms(c: dict, im, n_out: int) -> None:
             _shift_terms(c, "aff_gp", G - P, 1, BYTE_REGIMES)
 
 
-def _asm_output_terms(c: dict, im, n_out: int) -> bool:
+def _asm_output_terms(c: dict, im, n_out: int, target: str | None = None) -> bool:
     """The assembly bodies' output stage (fastc_avr.output_asm_ok; False: the raw accumulators
     are finished in C): in assembly, the affine base's 24 x 32 products skip the zero bytes of the
     coefficient and shift by G (nnik_mac48, NNIK_P18_P48)."""
@@ -142,7 +142,11 @@ def _asm_output_terms(c: dict, im, n_out: int) -> bool:
         for j in range(int(im.shape[0])):
             a = abs(fastc_avr.affine_a(o, k, j))
             G = int(o.G[k][j])
-            c["aff_bytes"] = c.get("aff_bytes", 0.0) + sum(1 for b in range(4) if (a >> (8 * b)) & 0xFF)
+            nz = [b for b in range(4) if (a >> (8 * b)) & 0xFF]
+            c["aff_bytes"] = c.get("aff_bytes", 0.0) + len(nz)
+            if target == "avr":  # byte b of A adds into bytes b.. of the 48-bit sum: nnik_mac48x's
+                # carry chain is one instruction shorter per byte position
+                c["aff_byte_pos"] = c.get("aff_byte_pos", 0.0) + sum(nz)
             c["aff_shl"] = c.get("aff_shl", 0.0) + max(16 - G, 0)
             c["aff_sar"] = c.get("aff_sar", 0.0) + max(G - 16, 0)
     return True

@@ -42,6 +42,47 @@ class CalSpec:
 # kernel's own table) spelt "" as CalSpec does
 SEARCH_TANHS = ("", "lerp32", "lerp64", "lerp_mr", "lerp_mr4", "minimax3_x11", "minimax2_x22", "paper_lsq5")
 
+SEARCH_WIDTHS = (3, 4, 5, 6, 8, 10, 12)  # nnik.search.space.MLP_WIDTHS (not imported: estimate stays below search)
+
+
+def draw_specs(n: int, seed: int, depths: tuple[int, ...] = (1, 2), tanhs: tuple[str, ...] = SEARCH_TANHS,
+               widths: tuple[int, ...] = SEARCH_WIDTHS) -> list[CalSpec]:
+    """n random MLPs of the search space (seeded): depth, widths, full (galvo), residual (corexy)
+    or residual with a DAC clamp (dual), the tanh replacement, weight bits; weights as small as
+    trained networks' (gain 0.35-1.0)."""
+    rng = np.random.default_rng(seed)
+    out = []
+    for i in range(n):
+        depth = int(rng.choice(depths))
+        hidden = tuple(int(rng.choice(widths)) for _ in range(depth))
+        scenario = ("galvo", "corexy", "dual")[int(rng.integers(0, 3))]
+        out.append(CalSpec(scenario, hidden, tanh=str(rng.choice(tanhs)),
+                           weight_bits=int(rng.choice((8, 16))), seed=int(rng.integers(1, 10**6)),
+                           gain=float(rng.uniform(0.35, 1.0))))
+    return out
+
+
+# The C path of the fast kernel (two hidden layers, or a tanh replacement) on AVR: avr-gcc's
+# register allocation (which layer-1 outputs stay in registers through layer 2, what is spilled
+# around the tanh calls) depends on the widths in a way no count extrapolates from the structural
+# networks' 1-3 and 17-24; its calibration therefore also measures networks drawn as the search
+# draws them (seeds no search check uses: the checks draw with 31 and 20270101-2).
+SEARCH_CAL_DRAWS: dict[str, tuple[tuple[int, int], ...]] = {"avr": ((101, 100), (303, 80))}
+
+
+def search_calibration_specs(target: str) -> list[CalSpec]:
+    """The search-space draws of a target's fast-kernel calibration (C path only: the assembly
+    body is straight-line code the structural networks determine)."""
+    from nnik.implementations.mlp.cost.fast_features import fast_path
+
+    out = []
+    for seed, n in SEARCH_CAL_DRAWS.get(target, ()):
+        for sp in draw_specs(n, seed):
+            if fast_path(synthetic_model(sp, kernel="fast"), target) == "c":
+                out.append(sp)
+    return out
+
+
 # picked by coverage (python3 -m nnik.implementations.mlp.cost.coverage): they widen the span of the
 # fast kernel's calibration to the counts of the networks the search proposes
 COVERAGE_SPECS: tuple[CalSpec, ...] = (
@@ -103,7 +144,7 @@ _SCENARIO_FILES = {"galvo": "galvo_cba2012", "galvo_small": "galvo_cba2012", "co
 JUDGED_SIZES = range(4, 17)
 
 
-def calibration_specs(kernel: str | None = None, coverage: bool = True) -> list[CalSpec]:
+def calibration_specs(kernel: str | None = None, coverage: bool = True, target: str | None = None) -> list[CalSpec]:
     """The calibration set: hidden sizes outside 4-16 only (those are what the sweep judges).
     For the fast kernel the structural networks use its own tanh tables (tanh=""), and
     COVERAGE_SPECS (nnik.implementations.mlp.cost.coverage) span the counts of the networks the search proposes."""
@@ -179,6 +220,8 @@ def calibration_specs(kernel: str | None = None, coverage: bool = True) -> list[
     for sp in specs:
         if any(h in JUDGED_SIZES for h in sp.hidden):
             raise AssertionError(f"calibration network {sp.label} overlaps the judged sizes 4-16")
+    if fast and target is not None:  # random weights of the search's widths: not the sweep's trained networks
+        specs += search_calibration_specs(target)
     return specs
 
 
