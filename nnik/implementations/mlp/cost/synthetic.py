@@ -62,25 +62,18 @@ def draw_specs(n: int, seed: int, depths: tuple[int, ...] = (1, 2), tanhs: tuple
     return out
 
 
-# The C path of the fast kernel (two hidden layers, or a tanh replacement) on AVR: avr-gcc's
-# register allocation (which layer-1 outputs stay in registers through layer 2, what is spilled
+# The fast kernel on AVR: avr-gcc's register allocation in the C path (two hidden layers, or a
+# tanh replacement: which layer-1 outputs stay in registers through layer 2, what is spilled
 # around the tanh calls) depends on the widths in a way no count extrapolates from the structural
-# networks' 1-3 and 17-24; its calibration therefore also measures networks drawn as the search
-# draws them (seeds no search check uses: the checks draw with 31 and 20270101-2).
+# networks' 1-3 and 17-24, and the assembly body's output stage has format combinations the
+# structural networks do not reach; its calibration therefore also measures networks drawn as
+# the search draws them (seeds no search check uses: the checks draw with 31 and 20270101-2).
 SEARCH_CAL_DRAWS: dict[str, tuple[tuple[int, int], ...]] = {"avr": ((101, 100), (303, 80))}
 
 
 def search_calibration_specs(target: str) -> list[CalSpec]:
-    """The search-space draws of a target's fast-kernel calibration (C path only: the assembly
-    body is straight-line code the structural networks determine)."""
-    from nnik.implementations.mlp.cost.fast_features import fast_path
-
-    out = []
-    for seed, n in SEARCH_CAL_DRAWS.get(target, ()):
-        for sp in draw_specs(n, seed):
-            if fast_path(synthetic_model(sp, kernel="fast"), target) == "c":
-                out.append(sp)
-    return out
+    """The search-space draws of a target's fast-kernel calibration."""
+    return [sp for seed, n in SEARCH_CAL_DRAWS.get(target, ()) for sp in draw_specs(n, seed)]
 
 
 # picked by coverage (python3 -m nnik.implementations.mlp.cost.coverage): they widen the span of the
