@@ -43,9 +43,11 @@ def test_calibration_files_load_and_cover_every_profile():
         for kkey, kc in cal["kernels"].items():
             for what in ("cycles", "flash", "ram"):
                 assert kc[what]["coef"], (p, kkey, what)
-            # every calibration network stays outside the judged hidden sizes 4..16
+            # every structural calibration network stays outside the judged hidden sizes 4..16; the
+            # fast kernel's search-space draws (random weights, not the sweep's trained networks) do not
+            drawn = {sp.label for sp in synthetic.search_calibration_specs(cal["target"])} if kkey == "fast" else set()
             for m in kc["models"]:
-                assert not any(4 <= h <= 16 for h in m["shape"][1:-1]), m["spec"]
+                assert m["spec"] in drawn or not any(4 <= h <= 16 for h in m["shape"][1:-1]), m["spec"]
         portable = cal["kernels"].get("portable") or cal["kernels"].get(calibrations.DEFAULT_KERNEL_KEY)
         assert portable is not None
         from nnik.implementations.mlp import tanh as activations
