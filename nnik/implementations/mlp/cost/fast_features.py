@@ -10,6 +10,7 @@ from nnik.implementations.mlp import fastc
 from nnik.implementations.mlp import fastc_avr
 
 from nnik.implementations.mlp import fastc_p18
+from nnik.implementations.mlp.cost.sdcc_c import sdcc_c_counts
 from nnik.implementations.mlp.cost.structure import structure
 from nnik.implementations.mlp.cost.trace import dac_hits, hidden_trace, tanh_class_index, tanh_classes
 
@@ -113,6 +114,8 @@ def _fast_counts(im, target: str | None) -> tuple[str, dict[str, float]]:
     c["residual"] = float(s["residual"])
     c["dac_clamp"] = float(n_out if s["dac"] else 0)
     c["weights_w8"] = float(s["weight_bits"] == 8)
+    if target == "pic18" and path == "c":
+        c = sdcc_c_counts(c)
     return path, {k: v for k, v in c.items() if v != 0 or k == "call"}
 
 
