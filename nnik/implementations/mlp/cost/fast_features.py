@@ -115,7 +115,7 @@ def _fast_counts(im, target: str | None) -> tuple[str, dict[str, float]]:
     c["dac_clamp"] = float(n_out if s["dac"] else 0)
     c["weights_w8"] = float(s["weight_bits"] == 8)
     if target == "pic18" and path == "c":
-        c = sdcc_c_counts(c)
+        c = sdcc_c_counts(c, im)
     return path, {k: v for k, v in c.items() if v != 0 or k == "call"}
 
 
