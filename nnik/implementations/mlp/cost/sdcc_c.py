@@ -52,7 +52,7 @@ def _mul_class(w: int) -> str | None:
     return None
 
 
-def _constant_multiplies(im, out: dict[str, float]) -> None:
+def _constant_multiplies(im, out: dict[str, float], weights: bool) -> None:
     """MACs (unrolled weights) and affine-base coefficients whose multiply SDCC folds or turns
     into a shift: counted apart from the calls (A1 and A0 apart: nnik_sar32 names the inner
     product twice, the outer once more)."""
@@ -62,8 +62,8 @@ def _constant_multiplies(im, out: dict[str, float]) -> None:
         out[k] = out.get(k, 0.0) + v
 
     umax = int(fastc.UNROLL_MAX_WEIGHTS)
-    mats = [np.asarray(L.W) for L in im.hidden if int(np.asarray(L.W).size) <= umax]
-    if int(np.asarray(im.hidden[-1].W).size) <= umax:
+    mats = [np.asarray(L.W) for L in im.hidden if int(np.asarray(L.W).size) <= umax] if weights else []
+    if weights and int(np.asarray(im.hidden[-1].W).size) <= umax:
         mats.append(np.asarray(im.out.V))
     for W in mats:
         for w in W.ravel().tolist():
@@ -81,10 +81,27 @@ def _constant_multiplies(im, out: dict[str, float]) -> None:
                     add(f"{name}[{k}]", 1.0)
 
 
-def sdcc_c_counts(c: dict[str, float], im) -> dict[str, float]:
-    """The regime-form counts of a fast network's C path, as SDCC's code runs them."""
+# the one shift function's loop iterations: the same cost on the C path and in the C that
+# finishes an assembly body's outputs (keys with the path already in front)
+SHARED = {"shift:bytes": "c:shift:bytes", "shift:bits": "c:shift:bits"}
+_OUTPUT_STAGE = ("out_", "aff_", "affine_")
+
+
+def sdcc_finish_counts(c: dict[str, float], im) -> dict[str, float]:
+    """The counts of an assembly body whose outputs are finished in C (fastc.finish_lines, the
+    C path's output stage): that stage as SDCC runs it, its loop iterations on the C path's keys."""
+    stage = {k: v for k, v in c.items() if k.startswith(_OUTPUT_STAGE)}
+    out = {k: v for k, v in c.items() if k not in stage}
+    for k, v in sdcc_c_counts(stage, im, weights=False).items():
+        out[SHARED.get(k, k)] = v
+    return out
+
+
+def sdcc_c_counts(c: dict[str, float], im, weights: bool = True) -> dict[str, float]:
+    """The regime-form counts of a fast network's C path, as SDCC's code runs them (weights:
+    with the MACs' constant multiplies)."""
     out: dict[str, float] = {}
-    _constant_multiplies(im, out)
+    _constant_multiplies(im, out, weights)
 
     def add(k: str, v: float) -> None:
         out[k] = out.get(k, 0.0) + v
