@@ -103,6 +103,20 @@ _SCENARIO_FILES = {"galvo": "galvo_cba2012", "galvo_small": "galvo_cba2012", "co
 JUDGED_SIZES = range(4, 17)
 
 
+# PIC18 only (nnik.bench.mlp_cost.measure adds them there): SDCC's counts (cost.sdcc_c) split some
+# directions the shared set leaves together -- the C that finishes an assembly body's outputs
+# apart from a body that finishes them itself, constant multiplies that fold; picked like
+# COVERAGE_SPECS (pools 4242 and 4243, networks that widen the PIC18 span) and one fast-path
+# network with an output shift of 17-23 in assembly (the shared set had it only finished in C)
+PIC18_COVERAGE_SPECS: tuple[CalSpec, ...] = (
+    CalSpec('corexy', (3, 1), tanh='lerp_mr4', weight_bits=8, seed=5239, gain=0.8, out_scale=3, n_vec=12),
+    CalSpec('dual', (3,), tanh='', weight_bits=8, seed=9032, gain=0.5, out_scale=1, n_vec=12),
+    CalSpec('corexy', (3, 1), tanh='minimax3_x11', weight_bits=8, seed=15477, gain=2.5, out_scale=3, n_vec=12),
+    CalSpec('dual', (17,), tanh='', weight_bits=8, seed=19024, gain=0.6, out_scale=1, n_vec=12),
+    CalSpec('galvo', (3,), tanh='', weight_bits=16, seed=6001, gain=0.6, n_vec=12),
+)
+
+
 def calibration_specs(kernel: str | None = None, coverage: bool = True) -> list[CalSpec]:
     """The calibration set: hidden sizes outside 4-16 only (those are what the sweep judges).
     For the fast kernel the structural networks use its own tanh tables (tanh=""), and
