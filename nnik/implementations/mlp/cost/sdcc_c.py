@@ -6,14 +6,15 @@ pieces of code (nnik_kernel.h, "portable C (and SDCC's C parts)"):
 
 * every multiply-accumulate is one call of SDCC's 32-bit multiply plus a 32-bit add or
   subtract, whichever layer it is in and whatever the weight's width (int8 weights are the same
-  C as int16 ones) -- except by 1 (folded) and by a power of two (a shift): SDCC inlines the
-  primitive and sees the constant;
+  C as int16 ones) -- except by 1, which SDCC folds, and by 256, which it does with byte moves
+  (it inlines the primitive and sees the constant; other powers of two still call the multiply);
 * every 32-bit shift by a constant n is a call of nnik_shr32_fill: a byte loop run n >> 3 times
   and a bit loop run n & 7 times, after a set-up that depends on the call site (logical or
   arithmetic, the expression around it);
 * the residual base d * A1 + (d * A0 >> P) >> (G - P) multiplies whatever A is and calls both
   shifts whatever P and G - P are (0 included: the sites are the affine terms);
-* a negative output exponent multiplies by 2^-e (a shift SDCC writes inline, by -e).
+* a negative output exponent multiplies by 2^-e: the 32-bit multiply, or byte moves when -e is
+  8, 16 or 24 (gpsim: 370 cycles less than -e = 7).
 
 Fitting these with a coefficient per layer, per weight class and per shift regime, as the
 regime form does, leaves most coefficients determined by a handful of calibration networks:
@@ -42,19 +43,15 @@ _RUNS = {"aff_p": 2}
 
 
 def _mul_class(w: int) -> str | None:
-    """How SDCC multiplies by the constant w (after inlining the primitive): folded (1), a shift
-    (a power of two), or a call of its 32-bit multiply (None)."""
+    """How SDCC multiplies by the constant w (after inlining the primitive): folded (0, 1), byte
+    moves (2^8, 2^16, 2^24) or a call of its 32-bit multiply (None; other powers of two too)."""
     a = abs(int(w))
-    if a == 1:
-        return "one"
-    if a > 1 and a & (a - 1) == 0:
-        return "pow2"
-    return None
+    return "zero" if a == 0 else "one" if a == 1 else "bytes" if a in (1 << 8, 1 << 16, 1 << 24) else None
 
 
 def _constant_multiplies(im, out: dict[str, float], weights: bool) -> None:
-    """MACs (unrolled weights) and affine-base coefficients whose multiply SDCC folds or turns
-    into a shift: counted apart from the calls (A1 and A0 apart: nnik_sar32 names the inner
+    """MACs (unrolled weights) and affine-base coefficients whose multiply SDCC folds: counted
+    apart from the calls (A1 and A0 apart: nnik_sar32 names the inner
     product twice, the outer once more)."""
     import numpy as np
 
@@ -68,15 +65,13 @@ def _constant_multiplies(im, out: dict[str, float], weights: bool) -> None:
     for W in mats:
         for w in W.ravel().tolist():
             k = _mul_class(w)
-            if k:
+            if k and k != "zero":  # (zero weights have no code)
                 add(f"mac_{k}", 1.0)
-                if k == "pow2":
-                    add("mac_pow2_bits", float(abs(int(w)).bit_length() - 1))
     o = im.out
     if o.residual:
         for name, A in (("aff_a1", o.A1), ("aff_a0", o.A0)):
             for a in np.asarray(A).ravel().tolist():
-                k = "zero" if int(a) == 0 else _mul_class(a)
+                k = _mul_class(a)
                 if k:
                     add(f"{name}[{k}]", 1.0)
 
@@ -114,8 +109,10 @@ def sdcc_c_counts(c: dict[str, float], im, weights: bool = True) -> dict[str, fl
             key = (m["name"], int(m["lo"]))
             (nsum if m["n"] else sites)[key] = (nsum if m["n"] else sites).get(key, 0.0) + v
             continue
-        if m and m["name"] == "out_e_neg":  # a multiply by 2^-e: a shift SDCC writes inline
-            add("out_e_neg" + (":bits" if m["n"] else ""), v)
+        if m and m["name"] == "out_e_neg":  # a multiply by 2^-e: SDCC's 32-bit multiply, or byte
+            if not m["n"]:                   # moves when -e is a whole number of bytes
+                n = c.get(f"out_e_neg_n[{m['lo']}_{m['hi']}]", 0.0) / v
+                add("out_e_neg" + ("[bytes]" if n % 8 == 0 else ""), v)
             continue
         if k.startswith(_DROP_PREFIX):
             continue

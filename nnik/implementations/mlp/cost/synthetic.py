@@ -114,6 +114,13 @@ PIC18_COVERAGE_SPECS: tuple[CalSpec, ...] = (
     CalSpec('corexy', (3, 1), tanh='minimax3_x11', weight_bits=8, seed=15477, gain=2.5, out_scale=3, n_vec=12),
     CalSpec('dual', (17,), tanh='', weight_bits=8, seed=19024, gain=0.6, out_scale=1, n_vec=12),
     CalSpec('galvo', (3,), tanh='', weight_bits=16, seed=6001, gain=0.6, n_vec=12),
+    # one-layer C paths with a negative output exponent (the shared set has it in two layers only:
+    # the fit could only tell that direction apart through differences of layers)
+    CalSpec('galvo', (3,), tanh='lerp_mr4', weight_bits=8, seed=7000, gain=0.4, n_vec=24),
+    CalSpec('galvo', (3,), tanh='lerp64', weight_bits=8, seed=7000, gain=0.35, n_vec=24),
+    # ... and with -e = 8, which SDCC multiplies by byte moves (cost.sdcc_c)
+    CalSpec('galvo', (3,), tanh='lerp32', weight_bits=8, seed=7010, gain=0.38, n_vec=24),
+    CalSpec('galvo', (3,), tanh='minimax2_x22', weight_bits=8, seed=7010, gain=0.4, n_vec=24),
 )
 
 
