@@ -46,7 +46,6 @@ def draws():
 OPEN: dict[str, str] = {
     "avr-gcc-Os": "measured band ±3.7 % (one-layer C path with a tanh replacement); two-layer sweep -4.5 %",
     "avr-gcc-O2": "measured band ±4.3 % (one-layer C path with a tanh replacement); two-layer sweep -4.5 %",
-    "pic18-sdcc": "measured band ±17.3 % (C path of small networks)",
 }
 
 
