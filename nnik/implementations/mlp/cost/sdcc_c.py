@@ -6,15 +6,18 @@ pieces of code (nnik_kernel.h, "portable C (and SDCC's C parts)"):
 
 * every multiply-accumulate is one call of SDCC's 32-bit multiply plus a 32-bit add or
   subtract, whichever layer it is in and whatever the weight's width (int8 weights are the same
-  C as int16 ones) -- except by 1, which SDCC folds, and by 256, which it does with byte moves
-  (it inlines the primitive and sees the constant; other powers of two still call the multiply);
+  C as int16 ones) -- except by 1, which SDCC folds (the generated assembly of a network with a
+  weight of 1 has one multiply call less), and by 2^8, 2^16, 2^24, counted apart as byte moves
+  (the rule the output exponent shows below; other powers of two call the multiply: gpsim);
 * every 32-bit shift by a constant n is a call of nnik_shr32_fill: a byte loop run n >> 3 times
   and a bit loop run n & 7 times, after a set-up that depends on the call site (logical or
   arithmetic, the expression around it);
 * the residual base d * A1 + (d * A0 >> P) >> (G - P) multiplies whatever A is and calls both
   shifts whatever P and G - P are (0 included: the sites are the affine terms);
 * a negative output exponent multiplies by 2^-e: the 32-bit multiply, or byte moves when -e is
-  8, 16 or 24 (gpsim: 370 cycles less than -e = 7).
+  8, 16 or 24 (gpsim: a 2-3-2 network with -e = 8 ran 370 cycles faster than its twin with 7);
+* a tanh replacement costs, per call, what its input class costs (measured on its own:
+  nnik.bench.mlp_cost.tanh_bench; the fit keeps those coefficients, tanh_coefs).
 
 Fitting these with a coefficient per layer, per weight class and per shift regime, as the
 regime form does, leaves most coefficients determined by a handful of calibration networks:
