@@ -37,6 +37,8 @@ def main(argv: list[str] | None = None) -> int:
     k.add_argument("--depth", type=int, action="append", choices=(1, 2), help="hidden layers to draw (default 1 and 2)")
     k.add_argument("--profile", action="append", help="profiles (default: avr-gcc-Os, pic18-sdcc)")
     k.add_argument("--record", action="store_true", help="store each profile's stated error in its calibration file")
+    k.add_argument("--validated-only", action="store_true",
+                   help="measure only the networks whose estimate is validated (PIC18: no SDCC build of a large C path)")
     m = sub.add_parser("model", help="estimate a trained model (OUTDIR or model.pt)")
     m.add_argument("model", type=Path)
     m.add_argument("--target", choices=TARGETS, default="avr")
@@ -63,7 +65,7 @@ def main(argv: list[str] | None = None) -> int:
             from nnik.bench.mlp_cost import search_check as sc
 
             specs = sc.draw_specs(args.n, args.seed, tuple(args.depth or (1, 2)))
-            rows = sc.check(specs, args.profile or ["avr-gcc-Os", "pic18-sdcc"])
+            rows = sc.check(specs, args.profile or ["avr-gcc-Os", "pic18-sdcc"], only_validated=args.validated_only)
             print(json.dumps(sc.record(rows, args.seed) if args.record else rows, indent=1))
         else:
             im = load_integer_model(args.model, tanh=args.tanh, kernel=args.kernel)

@@ -12,6 +12,7 @@ from pathlib import Path
 
 from nnik.errors import NnikError
 from nnik.implementations.mlp.cost.fit import fit_measurements
+from nnik.implementations.mlp.cost.sdcc_c import tanh_coefs
 from nnik.implementations.mlp.cost.kernels import kernel_key, kernel_options
 from nnik.bench.mlp_cost.measure import measure_kernel, measure_shift_tables
 from nnik.implementations.mlp.cost.calibrations import (BUILTIN_PROFILES, CAL_DIR, CALIBRATION_FORMAT, DEFAULT_PROFILE,
@@ -115,6 +116,20 @@ def calibrate(target: str, profile: str | None = None, *, kernels: Sequence[str 
     return cal
 
 
+def _tanh_bench(prof: str, kern: str | None, meas: list[dict], wd: Path, say) -> dict:
+    """PIC18's fast kernel: the tanh replacements its C path calls, measured per input class
+    (nnik.bench.mlp_cost.tanh_bench); {} elsewhere (their classes are fitted with the networks)."""
+    from nnik.bench.mlp_cost.tanh_bench import measure_tanh_classes
+    from nnik.implementations.mlp.cost.fast_features import fast_path
+
+    if kern != "fast" or BUILTIN_PROFILES[prof]["target"] != "pic18":
+        return {}
+    variants = sorted({m["im"].tanh_variant for m in meas if fast_path(m["im"], "pic18") == "c"
+                       and any(not L.tanh_step for L in m["im"].hidden)})
+    say(f"[{prof}/fast] tanh classes of {', '.join(variants)}")
+    return measure_tanh_classes(prof, variants, wd / "tanh_bench")
+
+
 def _refit_kernel(prof: str, kern: str | None, wd: Path, say) -> tuple[dict, str, str, dict]:
     import pickle
 
@@ -123,7 +138,11 @@ def _refit_kernel(prof: str, kern: str | None, wd: Path, say) -> tuple[dict, str
         raise NnikError(f"no stored measurements for {prof}/{kernel_key(kern)} (run calibrate without --refit)",
                         str(path))
     blob = pickle.loads(path.read_bytes())
-    result = fit_measurements(blob["meas"], blob["tables"], kern)
+    if "tanh_bench" not in blob:  # measurements kept before the tanh microbenchmark existed
+        blob["tanh_bench"] = _tanh_bench(prof, kern, blob["meas"], wd, say)
+        path.write_bytes(pickle.dumps(blob))
+    result = fit_measurements(blob["meas"], blob["tables"], kern, tanh_coefs(blob["tanh_bench"]))
+    result["tanh_bench"] = blob["tanh_bench"]
     cf = result["cycles"]["fit"]
     say(f"[{prof}/{kernel_key(kern)}] refit: cycles max {cf['max_rel_error_pct']:.2f} % of a network's mean")
     return result, blob["meas"][0]["compiler"], blob["meas"][0]["flags"], blob["tables"]
@@ -136,15 +155,18 @@ def _calibrate_kernel(prof: str, kern: str | None, tables: dict, wd: Path, say) 
     kkey = kernel_key(kern)
     h0 = reference_c_hash(kern)
     meas = measure_kernel(prof, kern, wd, say)
+    bench = _tanh_bench(prof, kern, meas, wd, say)
     reference_c_hash.cache_clear()
     if reference_c_hash(kern) != h0:
         raise NnikError(f"{prof}/{kkey}: the code generator changed during the calibration; run it again")
     try:  # kept for refits while developing the cost model (build/, not package data)
         (wd / kkey).mkdir(parents=True, exist_ok=True)
-        (wd / kkey / "measurements.pkl").write_bytes(pickle.dumps({"meas": meas, "tables": tables}))
+        (wd / kkey / "measurements.pkl").write_bytes(pickle.dumps({"meas": meas, "tables": tables,
+                                                                   "tanh_bench": bench}))
     except (OSError, pickle.PicklingError):
         pass
-    result = fit_measurements(meas, tables, kern)
+    result = fit_measurements(meas, tables, kern, tanh_coefs(bench))
+    result["tanh_bench"] = bench
     result["reference_c_hash"] = h0
     cf, ff, rf = result["cycles"]["fit"], result["flash"]["fit"], result["ram"]["fit"]
     say(f"[{prof}/{kkey}] fit: cycles max residual {cf['max_abs_residual']:.1f} "

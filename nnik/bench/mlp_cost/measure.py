@@ -15,7 +15,8 @@ from nnik.implementations.mlp.cost.coverage import measurable
 from nnik.implementations.mlp.cost.kernels import kernel_key, render_c, write_c
 from nnik.implementations.mlp.cost.calibrations import BUILTIN_PROFILES
 from nnik.implementations.mlp.cost.shifts import MAX_SHIFT, SHIFT_GROUPS, SHIFTS, shift_bench_c
-from nnik.implementations.mlp.cost.synthetic import CalSpec, calibration_specs, in_domain_vectors, synthetic_model
+from nnik.implementations.mlp.cost.synthetic import (PIC18_COVERAGE_SPECS, CalSpec, calibration_specs, in_domain_vectors,
+                                                     synthetic_model)
 
 
 @functools.cache
@@ -121,7 +122,7 @@ def measure_kernel(prof: str, kern: str | None, wd: Path, say, jobs: int | None 
 
     kkey = kernel_key(kern)
     target = BUILTIN_PROFILES[prof]["target"]
-    specs = calibration_specs(kern, target=target)
+    specs = calibration_specs(kern, target=target) + (list(PIC18_COVERAGE_SPECS) if kern == "fast" and target == "pic18" else [])
     jobs = jobs or max(1, min(4, os.cpu_count() or 1))
 
     def one(i: int, sp: CalSpec):

@@ -56,9 +56,26 @@ def calibrate(workdir: Path, out: Path = CALIBRATION) -> dict:
             worst = max(worst, r[t]["rel_error"])
     cal = {"key": reference_key(PolyImpl), "targets": targets, "reference": rows["ref"], "validation": rows["val"],
            "max_validation_error": worst, "tolerance": TOLERANCE, "validated": worst <= TOLERANCE}
+    kept = _checks_still_valid(out, targets)
+    if kept:
+        cal["check"] = {"targets": kept}
     out.write_text(json.dumps(cal, indent=1) + "\n")
     _STATE.pop("cal", None)
     return cal
+
+
+def _checks_still_valid(path: Path, targets: dict) -> dict:
+    """The recorded checks (nnik.bench.costs --record) of the targets whose model this calibration
+    left unchanged; a target whose coefficients moved states no band until it is checked again."""
+    if not path.exists():
+        return {}
+    prev = json.loads(path.read_text())
+    def unchanged(t: str) -> bool:
+        a, b = prev.get("targets", {}).get(t, {}).get("cycles", []), targets[t]["cycles"]
+        return len(a) == len(b) and bool(np.allclose(a, b, rtol=1e-9, atol=1e-6))
+
+    same = [t for t in targets if unchanged(t)]
+    return {t: s for t, s in ((prev.get("check") or {}).get("targets") or {}).items() if t in same}
 
 
 if __name__ == "__main__":

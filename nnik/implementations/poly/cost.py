@@ -2,7 +2,8 @@
 
 The assembly the generator emits is straight-line code, so its cycles and words are counted
 from the instruction list itself (AVR: MUL*/LDS/STD 2 cycles, the rest 1; PIC18: MOVFF and BRA
-2, a skip-and-branch pair 1.5 on average, the rest 1). What the C around it costs (clamp,
+2, the rest 1, and each sign test by the fraction of typical inputs that take its branch,
+``_p18_counts``). What the C around it costs (clamp,
 prologue and the registers the assembly makes avr-gcc save, SDCC's pointer I/O, and the DAC
 clamps written in C after the assembly, ``c_clamps``: an output whose code range does not fit
 the assembly's int16 compare) is a linear model in a few counts, fitted by least squares to simavr/gpsim measurements of fixed reference
@@ -81,11 +82,58 @@ def _avr_counts(src: str) -> dict:
     return {"asm_cycles": cyc, "asm_words": words, "pushes": pushes}
 
 
-def _p18_counts(src: str) -> dict:
-    cyc, words = _count(_block(src, "    __asm__(", "    );"), r'\s*"(?:\\t)?(.*)\\n"\s*$',
-                        lambda op: 2 if op in ("movff", "bra") else (1.5 if op in ("btfss", "btfsc") else 1),
-                        lambda op: 2 if op == "movff" else 1)
+_P18_LINE = re.compile(r'\s*"(?:\\t)?(.*)\\n"\s*$')
+_P18_OPERAND = re.compile(r"_\w+\+(\d+), 7, B$")
+
+
+def _p18_cycles(op: str) -> int:
+    return 2 if op in ("movff", "bra") else 1
+
+
+def _p18_counts(src: str, neg: dict[int, float]) -> dict:
+    """Expected cycles and words of the assembly block.  Its only conditional code is the sign
+    test of an int16 operand: ``btfss X+1, 7`` + ``bra L`` around a correction block (3 cycles
+    when X >= 0, 2 + the block when X < 0; neg[X] is the fraction of typical inputs where X < 0)
+    and ``btfsc X+1, 7`` + ``setf`` (2 cycles either way)."""
+    ins = [m.group(1) for m in map(_P18_LINE.match, _block(src, "    __asm__(", "    );")) if m]
+    cyc = words = 0.0
+    i = 0
+    while i < len(ins):
+        op = ins[i].split()[0]
+        if op.endswith(":"):
+            i += 1
+            continue
+        words += 2 if op == "movff" else 1
+        nxt = ins[i + 1].split()[0] if i + 1 < len(ins) else ""
+        if op == "btfss" and nxt == "bra":
+            lab = ins[i + 1].split()[1] + ":"
+            end = ins.index(lab, i + 2)
+            block = [x.split()[0] for x in ins[i + 2:end]]
+            words += 1 + sum(2 if b == "movff" else 1 for b in block)
+            p = neg[int(_P18_OPERAND.search(ins[i]).group(1)) - 1]
+            cyc += 3 + p * (2 + sum(map(_p18_cycles, block)) - 3)
+            i = end + 1
+        elif op == "btfsc" and nxt == "setf":
+            words += 1
+            cyc += 2
+            i += 2
+        else:
+            cyc += _p18_cycles(op)
+            i += 1
     return {"asm_cycles": cyc, "asm_words": words}
+
+
+def _p18_negative(impl, n: int = 2000, seed: int = 12345) -> dict[int, float]:
+    """Work-area offset -> fraction of typical inputs (uniform in the domain) where that int16 is < 0."""
+    from nnik.implementations.poly.int_model import step_values
+    from nnik.implementations.poly.p18 import work_offsets
+
+    p = impl.problem
+    rng = np.random.default_rng(seed)
+    c, _ = p.clamp(np.stack([rng.integers(p.lo[j], p.hi[j] + 1, n) for j in range(2)], 1))
+    m0, m1 = impl.maps
+    vals = step_values(impl.prog, m0.u(c[:, 0]), m1.u(c[:, 1]), m0.r(c[:, 0]), m1.r(c[:, 1]))
+    return {off: float(np.mean(vals[name] < 0)) for name, off in work_offsets(impl.prog).items() if name in vals}
 
 
 # PIC18 writes its DAC clamp in C only where the range analysis lets an output leave the code
@@ -111,7 +159,7 @@ def counts(impl, target: str) -> dict:
     from nnik.implementations.poly.c import lsb_used
 
     src = impl.render_source()
-    c = _avr_counts(src) if target == "avr" else _p18_counts(src)
+    c = _avr_counts(src) if target == "avr" else _p18_counts(src, _p18_negative(impl))
     c["lsb"] = len(lsb_used(impl.prog))
     c["c_clamps"] = len(_C_CLAMP.findall(_section(src, target)))
     return c

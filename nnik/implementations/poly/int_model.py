@@ -432,10 +432,9 @@ def prove(prog: Program, urange: list[tuple[int, int]], rmax: tuple[int, int] = 
 
 # ---- the numpy model ---------------------------------------------------------------------------
 
-def evaluate(prog: Program, u: np.ndarray, v: np.ndarray, rx: np.ndarray, ry: np.ndarray,
-             width: int = 16) -> np.ndarray:
-    """(N,) int64 u, v (and the dropped bits rx, ry) -> (N, 2) int64 num, checking every range.
-    Width 32: |a|, |b| < 2^31, so a * b is exact in int64, and prove() bounds a * b + K within it."""
+def step_values(prog: Program, u: np.ndarray, v: np.ndarray, rx: np.ndarray, ry: np.ndarray,
+                width: int = 16) -> dict[str, np.ndarray]:
+    """Every value of the program (inputs and Horner steps) by name, checking every range."""
     vm = vmax(width)
     vals = {"u": u.astype(np.int64), "v": v.astype(np.int64), "rx": rx.astype(np.int64), "ry": ry.astype(np.int64)}
 
@@ -450,6 +449,18 @@ def evaluate(prog: Program, u: np.ndarray, v: np.ndarray, rx: np.ndarray, ry: np
         if r.size and (r.min() < -vm - 1 or r.max() > vm):
             raise NnikError(f"poly: int{width} overflow in {st.dst}")
         vals[st.dst] = r
+    return vals
+
+
+def evaluate(prog: Program, u: np.ndarray, v: np.ndarray, rx: np.ndarray, ry: np.ndarray,
+             width: int = 16) -> np.ndarray:
+    """(N,) int64 u, v (and the dropped bits rx, ry) -> (N, 2) int64 num, checking every range.
+    Width 32: |a|, |b| < 2^31, so a * b is exact in int64, and prove() bounds a * b + K within it."""
+    vals = step_values(prog, u, v, rx, ry, width)
+
+    def get(b):
+        return vals[b] if isinstance(b, str) else np.int64(b)
+
     nums = []
     for o in prog.outs:
         n = np.full(u.shape, o.C, dtype=np.int64)

@@ -77,6 +77,14 @@ def _add_const(a: _Asm, off: int, n: int, k: int) -> None:
         a.emit(f"movlw {(k >> (8 * i)) & 0xFF}", f"{'addwf' if i == lo else 'addwfc'} {a.at(off + i)}, F, B")
 
 
+def work_offsets(prog) -> dict[str, int]:
+    """Offset in the work area of every int16 value of the program (inputs, Horner steps)."""
+    where = {"u": OFF_D, "v": OFF_D + 4, "rx": OFF_R, "ry": OFF_R + 2}
+    for i, st in enumerate(prog.steps):
+        where[st.dst] = OFF_H + 2 * i
+    return where
+
+
 def p18_body(impl) -> str | None:
     from nnik.implementations.poly.c import lsb_used
 
@@ -86,11 +94,8 @@ def p18_body(impl) -> str | None:
     name = p.name
     w = f"{name}_p18w"
     a = _Asm(f"_{w}")
-    where = {"u": OFF_D, "v": OFF_D + 4, "rx": OFF_R, "ry": OFF_R + 2}
-    nv = 0
-    for st in prog.steps:
-        where[st.dst] = OFF_H + 2 * nv
-        nv += 1
+    where = work_offsets(prog)
+    nv = len(prog.steps)
 
     if OFF_H + 2 * nv > BANK_BYTES:
         return None  # the work area must sit in one RAM bank: such a program uses the portable C

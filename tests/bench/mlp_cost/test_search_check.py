@@ -50,7 +50,6 @@ OPEN = {
     "avr-gcc-O2": "issue 25 part 4 open on avr-gcc-O2: search check (60 networks, seed 31) -3.72..+1.54 %, band "
                   "±4.3 % (one-layer C path with a tanh replacement: register allocation around the tanh calls); "
                   "the sweep's trained two-layer networks reach +4.4 % (2-6-6-2)",
-    "pic18-sdcc": "issue 25 part 4 open: measured band pic18-sdcc ±17.3 % (C path of small networks)",
 }
 
 

@@ -10,6 +10,7 @@ from nnik.implementations.mlp import fastc
 from nnik.implementations.mlp import fastc_avr
 
 from nnik.implementations.mlp import fastc_p18
+from nnik.implementations.mlp.cost.sdcc_c import sdcc_c_counts, sdcc_finish_counts
 from nnik.implementations.mlp.cost.structure import structure
 from nnik.implementations.mlp.cost.trace import dac_hits, hidden_trace, tanh_class_index, tanh_classes
 
@@ -117,6 +118,10 @@ def _fast_counts(im, target: str | None) -> tuple[str, dict[str, float]]:
         # the assembly body hands the raw accumulators to C (fastc_avr.output_asm_ok): avr-gcc's
         # shifts by e and F cost other cycles per bit than the assembly's, so they are counted apart
         c = {(f"cfin_{k}" if k.startswith(_OUT_SHIFTS) else k): v for k, v in c.items()}
+    if target == "pic18" and path == "c":
+        c = sdcc_c_counts(c, im)
+    elif target == "pic18" and "out_c_finish" in c:
+        c = sdcc_finish_counts(c, im)
     return path, {k: v for k, v in c.items() if v != 0 or k == "call"}
 
 
@@ -159,10 +164,15 @@ def _asm_output_terms(c: dict, im, n_out: int, target: str | None = None) -> boo
     return True
 
 
+def _prefixed(path: str, k: str) -> str:
+    """The feature's key: its code path in front (unless it names one: sdcc_c.SHARED)."""
+    return k if k.startswith(("c:", "asm:")) else f"{path}:{k}"
+
+
 def fast_counts_prefixed(im, far: bool, target: str | None) -> dict[str, float]:
     """The constant per-call cycle features, prefixed by the code path."""
     path, c = _fast_counts(im, target)
-    f = {f"{path}:{k}": float(v) for k, v in c.items()}
+    f = {_prefixed(path, k): float(v) for k, v in c.items()}
     if far:
         f[f"{path}:far_neuron"] = float(sum(structure(im)["H"]))
     return f
@@ -196,7 +206,7 @@ def fast_cycle_features(im, in_um: np.ndarray, far: bool, target: str | None) ->
 def fast_size_features(im, far: bool, target: str | None) -> dict[str, float]:
     path, c = _fast_counts(im, target)
     s = structure(im)
-    f = {f"{path}:{k}": v for k, v in c.items()}
+    f = {_prefixed(path, k): v for k, v in c.items()}
     # unrolled MACs are code; looped layers keep int16 weights and int32 start values in flash
     umax = _unroll_max()
     tb = 0

@@ -55,8 +55,11 @@ def _far(m: dict) -> bool:
     return m.get("frame") is not None and m["frame"] > FAR_ABOVE
 
 
-def fit_measurements(meas: list[dict], tables: dict, kern: str | None = None) -> dict:
-    """Least-squares fit of the cost coefficients to the measured calibration networks."""
+def fit_measurements(meas: list[dict], tables: dict, kern: str | None = None,
+                     fixed: dict[str, float] | None = None) -> dict:
+    """Least-squares fit of the cost coefficients to the measured calibration networks
+    (``fixed``: cycle coefficients measured on their own, e.g. the tanh classes; kept as given)."""
+    fixed = fixed or {}
     crow, cy, coff, cw, sizes, models = [], [], [], [], [], []
     frame_model = _fit_frame(meas)
     for m in meas:
@@ -66,9 +69,10 @@ def fit_measurements(meas: list[dict], tables: dict, kern: str | None = None) ->
         feats = cycle_features(im, vec, far=far, target=m.get("target"))
         off = 0.0 if fast else shift_offset(im, tables, "cycles")[0]
         for v in range(len(vec)):
-            crow.append({k: float(a[v]) for k, a in feats.items()})
+            row = {k: float(a[v]) for k, a in feats.items()}
+            crow.append({k: x for k, x in row.items() if k not in fixed})
             cy.append(float(m["cycles"][v]))
-            coff.append(off)
+            coff.append(off + sum(fixed[k] * x for k, x in row.items() if k in fixed))
             cw.append(1.0 / np.sqrt(len(vec)))  # each network weighs about the same
         foff = 0.0 if fast else shift_offset(im, tables, "bytes")[0]
         sizes.append((size_features(im, far=far, target=m.get("target")), m["flash"], m["ram"], foff))
@@ -77,6 +81,7 @@ def fit_measurements(meas: list[dict], tables: dict, kern: str | None = None) ->
                        "formats": _format_summary(im), "frame": m.get("frame")})
     cy_a, coff_a = np.array(cy), np.array(coff)
     ccoef, cfit = lstsq(crow, cy_a, coff_a, np.array(cw))
+    ccoef.update(fixed)
     pred = cfit.pop("pred")
     k0, rel = 0, []
     for m, info in zip(meas, models):

@@ -137,6 +137,27 @@ _SCENARIO_FILES = {"galvo": "galvo_cba2012", "galvo_small": "galvo_cba2012", "co
 JUDGED_SIZES = range(4, 17)
 
 
+# PIC18 only (nnik.bench.mlp_cost.measure adds them there): SDCC's counts (cost.sdcc_c) split some
+# directions the shared set leaves together -- the C that finishes an assembly body's outputs
+# apart from a body that finishes them itself, constant multiplies that fold; picked like
+# COVERAGE_SPECS (pools 4242 and 4243, networks that widen the PIC18 span) and one fast-path
+# network with an output shift of 17-23 in assembly (the shared set had it only finished in C)
+PIC18_COVERAGE_SPECS: tuple[CalSpec, ...] = (
+    CalSpec('corexy', (3, 1), tanh='lerp_mr4', weight_bits=8, seed=5239, gain=0.8, out_scale=3, n_vec=12),
+    CalSpec('dual', (3,), tanh='', weight_bits=8, seed=9032, gain=0.5, out_scale=1, n_vec=12),
+    CalSpec('corexy', (3, 1), tanh='minimax3_x11', weight_bits=8, seed=15477, gain=2.5, out_scale=3, n_vec=12),
+    CalSpec('dual', (17,), tanh='', weight_bits=8, seed=19024, gain=0.6, out_scale=1, n_vec=12),
+    CalSpec('galvo', (3,), tanh='', weight_bits=16, seed=6001, gain=0.6, n_vec=12),
+    # one-layer C paths with a negative output exponent (the shared set has it in two layers only:
+    # the fit could only tell that direction apart through differences of layers)
+    CalSpec('galvo', (3,), tanh='lerp_mr4', weight_bits=8, seed=7000, gain=0.4, n_vec=24),
+    CalSpec('galvo', (3,), tanh='lerp64', weight_bits=8, seed=7000, gain=0.35, n_vec=24),
+    # ... and with -e = 8, which SDCC multiplies by byte moves (cost.sdcc_c)
+    CalSpec('galvo', (3,), tanh='lerp32', weight_bits=8, seed=7010, gain=0.38, n_vec=24),
+    CalSpec('galvo', (3,), tanh='minimax2_x22', weight_bits=8, seed=7010, gain=0.4, n_vec=24),
+)
+
+
 def calibration_specs(kernel: str | None = None, coverage: bool = True, target: str | None = None) -> list[CalSpec]:
     """The calibration set: hidden sizes outside 4-16 only (those are what the sweep judges).
     For the fast kernel the structural networks use its own tanh tables (tanh=""), and
