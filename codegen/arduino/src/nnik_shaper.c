@@ -87,12 +87,9 @@ void nnik_sh_step(nnik_shaper_t *sh, const int32_t p[2], int32_t out[2])
         uint8_t d0 = NNIK_RD_U8(&DELAYS[0][k]), d1 = NNIK_RD_U8(&DELAYS[1][k]), j;
         if (d0) { /* X and the progress Q, with axis 0's taps */
             uint16_t A = NNIK_RD_U16(&AMPS[0][k]);
-            int16_t x, y;
             j = at >= d0 ? (uint8_t)(at - d0) : (uint8_t)(at + NNIK_SH_LEN - d0);
-            x = sh->inc[0][j];
-            y = sh->inc[1][j];
-            tap(&sh->s[0], A, (int16_t)(dx - x));
-            tap(&sh->s[2], A, (int16_t)(dq - (int16_t)maxabs(x, y)));
+            tap(&sh->s[0], A, (int16_t)(dx - sh->inc[0][j]));
+            tap(&sh->s[2], A, (int16_t)(dq - (int16_t)progress(sh, j)));
         }
         if (d1) {
             j = at >= d1 ? (uint8_t)(at - d1) : (uint8_t)(at + NNIK_SH_LEN - d1);
