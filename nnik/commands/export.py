@@ -60,4 +60,7 @@ def cmd_export(args) -> None:
         lib = export_arduino(out, Path(args.arduino))
         console.print(f"wrote Arduino library {lib['libname']} to {lib['dir']}/ (examples {lib['name']}_selftest with "
                       f"{lib['golden']} golden vectors, {lib['name']}_gcode)")
+        if lib["uno_left_out"]:
+            console.print(f"the Uno's build leaves out {', '.join(lib['uno_left_out'])} to fit its flash "
+                          "(error:20; the Mega's carries every option)")
     print_accuracy(pipeline.load_metrics(out))

@@ -9,6 +9,7 @@ stepper drivers); each example has a Makefile for Debian's arduino-mk.
 from __future__ import annotations
 
 import shutil
+from dataclasses import replace
 from functools import lru_cache
 from pathlib import Path
 
@@ -18,7 +19,7 @@ import numpy as np
 from nnik.errors import NnikError
 from nnik.machine.domain import domain_um
 from nnik.emit.templating import CODEGEN, RUNTIME, environment
-from nnik.firmware.config import MachineConfig, default_machine
+from nnik.firmware.config import FEATURES, MachineConfig, default_machine
 from nnik.firmware.grbl_settings import grbl_settings, settings_c_string
 from nnik.emit.c_text import c_comment_safe
 
@@ -78,20 +79,35 @@ def export_arduino(outdir: Path, libdir: Path, machine: MachineConfig | None = N
     scn = model.scenario
     name = scn.name
     c_dir = model.c_sources()
-    try:
-        machine = machine or default_machine(scn)
-    except ValueError as exc:  # [motion] shaper "auto" picks per job: a library needs a fixed one
-        raise NnikError(f"{exc}; the library needs a fixed shaper", scn.source, "[motion] shaper") from None
+    if machine is None:
+        _default(scn)  # refused before anything is written
     ik = model.ik
     vec = golden_vectors(scn)
     out, flags = ik(vec)
     rows = [[int(a), int(b), int(c), int(d), int(f)] for (a, b), (c, d), f in zip(vec.tolist(), out.tolist(), flags.tolist())]
     what, hash_ = model.label()
     libname = f"nnik_{name}"
+    sender, left_out = machine is None, ()
+    machine = machine or _default(scn)
     with staged_folder(final, MARKER, "Arduino library", f"{libname} {VERSION}: written by nnik export --arduino\n") \
             as libdir:
         _write_library(libdir, final, scn, c_dir, machine, ik, rows, what, hash_, libname)
-    return {"libname": libname, "dir": str(final), "name": name, "machine": machine, "golden": len(rows)}
+        if sender:  # the Uno's build carries the options that fit its flash (nnik.firmware.uno_fit)
+            from nnik.firmware.uno_fit import uno_features
+
+            features, left_out, _ = uno_features(libdir, name, machine)
+            if left_out:
+                machine = replace(machine, features=features)
+                _write_library(libdir, final, scn, c_dir, machine, ik, rows, what, hash_, libname)
+    return {"libname": libname, "dir": str(final), "name": name, "machine": machine, "golden": len(rows),
+            "uno_left_out": list(left_out)}
+
+
+def _default(scn) -> MachineConfig:
+    try:
+        return default_machine(scn)
+    except ValueError as exc:  # [motion] shaper "auto" picks per job: a library needs a fixed one
+        raise NnikError(f"{exc}; the library needs a fixed shaper", scn.source, "[motion] shaper") from None
 
 
 def _write_library(libdir: Path, final: Path, scn, c_dir: Path, machine: MachineConfig, ik, rows, what: str,
@@ -109,6 +125,7 @@ def _write_library(libdir: Path, final: Path, scn, c_dir: Path, machine: Machine
                origin=list(machine.origin_um), seg_um=machine.seg_um, tick_hz=machine.tick_hz, homepage=homepage(),
                rapid_um_min=machine.rapid_um_min, feed_um_min=machine.feed_um_min, rows=rows, n=len(rows),
                tool=machine.tool, tool_defines=machine.defines(), sample_hz=machine.sample_hz,
+               build_options=[f"NNIK_GC_{f.upper()}" for f in sorted(FEATURES)],
                shaper=machine.shaper,
                grbl_settings=settings_c_string(grbl_settings(machine, scn.workspace, ik, machine.bounds_um is not None)))
     env = _env()

@@ -191,6 +191,7 @@ class MachineConfig:
             out["NNIK_SH_N"] = str(n)
             out["NNIK_SH_AMPS"] = "{" + ",".join("{" + ",".join(map(str, a)) + "}" for a, _ in pad) + "}"
             out["NNIK_SH_DELAYS"] = "{" + ",".join("{" + ",".join(map(str, d)) + "}" for _, d in pad) + "}"
+            out["NNIK_SH_SAME"] = str(int(pad[0] == pad[1]))
         return out
 
     def tool_defines(self) -> dict[str, str]:

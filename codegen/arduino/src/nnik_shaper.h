@@ -44,7 +44,6 @@ typedef struct {
     int32_t s[3];            /* sum_i A_i W_i of X, Y and the tool's progress, W_i = p[n] - p[n - d_i] */
     uint8_t at; /* slot of the next increment */
     uint8_t pd[NNIK_SH_LEN]; /* the tool: planned duties */
-    uint16_t wq[NNIK_SH_N];  /* window sums of the progress Q */
     uint16_t e;              /* Q[n] - Q[m] */
     uint8_t k, ms, t, duty;  /* n - m, m's slot; this sample's planned duty; the tool's duty */
 #endif

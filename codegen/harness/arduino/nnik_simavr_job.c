@@ -32,6 +32,8 @@
  * S motor | dir << 1, for B the level, for T the duty, for M 0), and stdout keeps R/D/E, each
  * flushed as it is printed (a reader shows the job's progress from the answers).
  * MCU: atmega328p (default) or atmega2560.
+ * With -p PROFILE, the cycles of every instruction run while the busy pin (PB0) is high, summed per
+ * address, go to PROFILE as lines "<byte address in hex> <cycles>" (nnik.bench.sample_profile).
  */
 #include <stdio.h>
 #include <stdlib.h>
@@ -73,6 +75,8 @@ static size_t out_len;
 static unsigned long long idle_fall; /* the motion pin's last falling edge */
 static int duty_seen;                /* the tool's last duty (0 at reset) */
 static unsigned sp_low = 0xffff; /* the lowest stack pointer seen */
+#define PROF_WORDS (1u << 17)          /* 256 KB of flash */
+static unsigned long long *prof;     /* -p: busy cycles per instruction word */
 
 static void flush_events(void)
 {
@@ -201,8 +205,16 @@ int main(int argc, char **argv)
     int i, rc, opt;
     const char *mcu = "atmega328p";
 
-    while ((opt = getopt(argc, argv, "m:e:")) != -1) {
-        if (opt == 'm') {
+    const char *prof_path = NULL;
+    while ((opt = getopt(argc, argv, "m:e:p:")) != -1) {
+        if (opt == 'p') {
+            prof_path = optarg;
+            prof = calloc(PROF_WORDS, sizeof *prof);
+            if (!prof) {
+                fprintf(stderr, "no memory for the profile\n");
+                return 2;
+            }
+        } else if (opt == 'm') {
             mcu = optarg;
         } else if (opt == 'e') {
             events = fopen(optarg, "wb");
@@ -216,7 +228,7 @@ int main(int argc, char **argv)
         }
     }
     if (argc - optind != 3) {
-        fprintf(stderr, "usage: %s [-m MCU] [-e EVENTS] FIRMWARE.elf JOB_LINES MAX_SECONDS\n", argv[0]);
+        fprintf(stderr, "usage: %s [-m MCU] [-e EVENTS] [-p PROFILE] FIRMWARE.elf JOB_LINES MAX_SECONDS\n", argv[0]);
         return 2;
     }
     argv += optind - 1;
@@ -256,7 +268,12 @@ int main(int argc, char **argv)
     uart_in = nnik_sim_wire(avr, CLOCK_HZ, on_uart, on_xon, on_xoff, on_pin, on_pwm);
 
     for (;;) {
+        unsigned pc0 = avr->pc;
+        unsigned long long c0 = avr->cycle;
+        int busy0 = prof && avr->state == cpu_Running && pin_state[0][0];
         rc = avr_run(avr);
+        if (busy0 && pc0 / 2 < PROF_WORDS)
+            prof[pc0 / 2] += avr->cycle - c0;
         {   /* the stack's low-water mark: the lowest stack pointer after start-up */
             unsigned sp = avr->data[R_SPL] | ((unsigned)avr->data[R_SPH] << 8);
             if (sp && sp < sp_low && avr->cycle > 10000)
@@ -279,6 +296,21 @@ int main(int argc, char **argv)
         flush_events();
         if (fclose(events) != 0) {
             fprintf(stderr, "cannot write the events\n");
+            return 2;
+        }
+    }
+    if (prof) {
+        FILE *pf = fopen(prof_path, "w");
+        unsigned w;
+        if (!pf) {
+            fprintf(stderr, "cannot write %s\n", prof_path);
+            return 2;
+        }
+        for (w = 0; w < PROF_WORDS; w++)
+            if (prof[w])
+                fprintf(pf, "%x %llu\n", w * 2, prof[w]);
+        if (fclose(pf) != 0) {
+            fprintf(stderr, "cannot write the profile\n");
             return 2;
         }
     }

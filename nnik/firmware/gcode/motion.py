@@ -16,6 +16,7 @@ from math import isqrt
 
 import numpy as np
 
+from nnik.errors import NnikError
 from nnik.firmware.config import MachineConfig
 from nnik.firmware.gcode.interpreter import Interpreter
 from nnik.firmware.gcode.program import Move, Plan  # noqa: F401  (the model's types, here since before)
@@ -74,6 +75,9 @@ def _move_of_blocks(plan: Plan) -> np.ndarray:
     return idx
 
 
+MAX_SEGMENT_STEPS = 65535  # the stepper interrupt's 16-bit DDA (gcode.ino.j2)
+
+
 def plan_steps(plan: Plan, cfg: MachineConfig, ik) -> Segments:
     """Steps and ticks of every segment: ik(in_um (N, 2) int64) -> (out (N, 2), flags (N,))."""
     from nnik.firmware.gcode.planner import duty_of
@@ -89,6 +93,9 @@ def plan_steps(plan: Plan, cfg: MachineConfig, ik) -> Segments:
     k = np.cumsum(samp)  # samples up to and including each segment
     steps = np.concatenate([out[:1], out[k]])
     delta = np.diff(steps, axis=0)
+    if len(delta) and int(np.abs(delta).max()) > MAX_SEGMENT_STEPS:
+        raise NnikError(f"a sample moves a motor {int(np.abs(delta).max())} steps, more than the stepper's "
+                        f"{MAX_SEGMENT_STEPS} a segment: the IK jumps")
     T = cfg.sample_ticks
     ticks = np.where(samp, np.maximum.reduce([np.full(len(kind), T), np.abs(delta[:, 0]), np.abs(delta[:, 1])]),
                      np.asarray(st.rest_ticks, dtype=np.int64))
