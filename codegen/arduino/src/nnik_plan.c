@@ -46,7 +46,48 @@ uint8_t nnik_pl_ready(const nnik_plan_t *pl, uint8_t flushing)
     return pl->count == NNIK_PL_N || (flushing && pl->count);
 }
 
-/* the junction's speed limit between blocks a and b (b follows a): see nnik_plan.h */
+/* min(a * b, 2^32 - 1) by 16-bit products */
+static uint32_t mul_sat(uint32_t a, uint32_t b)
+{
+    uint16_t ah = (uint16_t)(a >> 16), al = (uint16_t)a, bh = (uint16_t)(b >> 16), bl = (uint16_t)b;
+    uint32_t p, q;
+    if (ah && bh)
+        return 0xFFFFFFFFUL;
+    p = nnik_mul16(ah, bl) + nnik_mul16(al, bh); /* one of them is 0: < 2^32 */
+    if (p >> 16)
+        return 0xFFFFFFFFUL;
+    q = nnik_mul16(al, bl);
+    p = (p << 16) + q;
+    return p < q ? 0xFFFFFFFFUL : p;
+}
+
+/* min(floor(a * b / 2^16), 2^32 - 1) by 16-bit products */
+static uint32_t mul_sh16_sat(uint32_t a, uint32_t b)
+{
+    uint16_t ah = (uint16_t)(a >> 16), al = (uint16_t)a, bh = (uint16_t)(b >> 16), bl = (uint16_t)b;
+    uint32_t s = nnik_mul16(ah, bh), t;
+    if (s >> 16)
+        return 0xFFFFFFFFUL;
+    s <<= 16;
+    t = nnik_mul16(ah, bl);
+    if ((s += t) < t)
+        return 0xFFFFFFFFUL;
+    t = nnik_mul16(al, bh);
+    if ((s += t) < t)
+        return 0xFFFFFFFFUL;
+    t = nnik_mul16(al, bl) >> 16;
+    if ((s += t) < t)
+        return 0xFFFFFFFFUL;
+    return s;
+}
+
+static uint32_t add_sat(uint32_t a, uint32_t b)
+{
+    a += b;
+    return a < b ? 0xFFFFFFFFUL : a;
+}
+
+/* the square of the junction's speed limit between blocks a and b (b follows a), Q16: see nnik_plan.h */
 static uint32_t junction(const nnik_pl_block_t *a, const nnik_pl_block_t *b)
 {
     int64_t dot = (((int64_t)a->u[0] * b->u[0] + (int64_t)a->u[1] * b->u[1]) >> 30) - NNIK_PL_DOT_MARGIN;
@@ -55,6 +96,7 @@ static uint32_t junction(const nnik_pl_block_t *a, const nnik_pl_block_t *b)
     uint8_t i;
     if (dot <= -Q30 + NNIK_PL_REVERSAL)
         return 0; /* a reversal: stop */
+    lim = mul_sh16_sat(lim, lim);
     if (dot >= Q30 - NNIK_PL_REVERSAL)
         return lim; /* straight on */
     sn = nnik_isqrt64((uint64_t)(Q30 + dot) << 29);
@@ -75,32 +117,33 @@ static uint32_t junction(const nnik_pl_block_t *a, const nnik_pl_block_t *b)
         aj = wn;
     if (aj > 0x7FFFFFUL)
         aj = 0x7FFFFFUL;
-    vj2 = (uint64_t)aj * NNIK_GC_JDEV_UM * r;
-    if (vj2 >= (uint64_t)lim * lim)
-        return lim;
-    return nnik_isqrt64(vj2);
+    wn = mul_sh16_sat(mul_sat(aj, NNIK_GC_JDEV_UM), r);
+    return wn < lim ? wn : lim;
 }
 
-/* exit speeds from the last block back; stops where an exit does not change */
+/* squared exit speeds from the last block back (no square root); stops where one does not change */
 static void backward(nnik_plan_t *pl)
 {
     int8_t k;
-    pl->q[IDX(pl, pl->count - 1)].exit = 0;
+    nnik_pl_block_t *b = &pl->q[IDX(pl, pl->count - 1)];
+    b->e2 = 0;
+    b->exit = 0;
     for (k = (int8_t)pl->count - 2; k >= 0; k--) {
-        nnik_pl_block_t *b = &pl->q[IDX(pl, k)];
-        const nnik_pl_block_t *n = &pl->q[IDX(pl, k + 1)];
-        uint64_t t = (uint64_t)n->acc * n->len + (((uint64_t)n->acc * n->lfr) >> 16), e2;
-        uint32_t ex = b->jmax;
-        if (t < (1ULL << 40)) {
-            e2 = (uint64_t)n->exit * n->exit + (t << 17);
-            if ((uint64_t)ex * ex > e2)
-                ex = nnik_isqrt64(e2);
-        }
-        if (ex < (b->acc >> 2))
-            ex = 0; /* below the sampler's floor: a stop */
-        if (ex == b->exit)
+        const nnik_pl_block_t *n = b;
+        uint32_t ex2, g;
+        b = &pl->q[IDX(pl, k)];
+        /* t = acc L (Q16): acc len + floor(acc lfr / 2^16); exit^2 <= next exit^2 + 2 t */
+        ex2 = add_sat(mul_sat(n->acc, n->len), mul_sh16_sat(n->acc, n->lfr));
+        ex2 = add_sat(n->e2, add_sat(ex2, ex2));
+        if (ex2 > b->j2)
+            ex2 = b->j2;
+        g = ((b->acc >> 2) + 255) >> 8; /* an exit below acc >> 2 (the sampler's floor): a stop */
+        if (ex2 < nnik_mul16((uint16_t)g, (uint16_t)g))
+            ex2 = 0;
+        if (ex2 == b->e2)
             return;
-        b->exit = ex;
+        b->e2 = ex2;
+        b->exit = ex2 ? NNIK_PL_STALE : 0;
     }
 }
 
@@ -156,12 +199,12 @@ void nnik_pl_push(nnik_plan_t *pl, int32_t x, int32_t y, int32_t feed, uint16_t 
             acc = a;
     }
     b->acc = acc;
-    b->dbig = 0xFFFFFFFFUL / (2 * acc); /* acc <= a_axis * sqrt(2) < 2^23: 32-bit division */
     b->tool = tool;
-    b->jmax = 0;
+    b->j2 = 0;
+    b->e2 = 0;
     b->exit = 0;
     if (pl->count)
-        pl->q[IDX(pl, pl->count - 1)].jmax = junction(&pl->q[IDX(pl, pl->count - 1)], b);
+        pl->q[IDX(pl, pl->count - 1)].j2 = junction(&pl->q[IDX(pl, pl->count - 1)], b);
     else { /* the head, from rest at its start */
         pl->r_um = b->len;
         pl->r_fr = b->lfr;
@@ -187,34 +230,41 @@ static uint16_t shr9(uint32_t t)
     return (uint16_t)(((uint16_t)(t >> 16) << 7) | ((uint16_t)t >> 9));
 }
 
+/* the block's exit speed floor(sqrt(e2 2^16)), computed when first asked for after a change */
+static uint32_t ve(nnik_pl_block_t *b)
+{
+    if (b->exit == NNIK_PL_STALE)
+        b->exit = nnik_isqrt64((uint64_t)b->e2 << 16);
+    return b->exit;
+}
+
 /* after moving c this sample (rem > c left), can the block still brake to its exit speed?
  * d = floor((rem - c) / 65536) by 32-bit pieces. */
-static uint8_t can_brake(uint32_t c, uint32_t r_um, uint16_t r_fr, const nnik_pl_block_t *b)
+static uint8_t can_brake(uint32_t c, uint32_t r_um, uint16_t r_fr, nnik_pl_block_t *b)
 {
-    uint32_t d, cq, eq, ch = c >> 16;
-    if (c <= b->exit)
+    uint32_t d, cq, eq, ex = ve(b), ch = c >> 16;
+    if (c <= ex)
         return 1;
     if ((uint16_t)c > r_fr)
         ch++;
     d = r_um - ch;
-    if (d > b->dbig) /* 2 acc d > 2^32 - 1 > any 4 ceil(c / 512)^2 */
-        return 1;
     cq = shr9(c + 511); /* <= 2^15 */
-    eq = shr9(b->exit);
-    return 2 * b->acc * d >= 4 * (nnik_mul16((uint16_t)cq, (uint16_t)cq) - nnik_mul16((uint16_t)eq, (uint16_t)eq));
+    eq = shr9(ex);
+    /* 2 acc d saturates above 2^32 - 1 > any 4 ceil(c / 512)^2 */
+    return mul_sat(2 * b->acc, d) >= 4 * (nnik_mul16((uint16_t)cq, (uint16_t)cq) - nnik_mul16((uint16_t)eq, (uint16_t)eq));
 }
 
 /* may the sample go at c?  Each block end it reaches it passes at most at that block's exit
  * (never a stop's), and the block it ends in can still brake to its exit. */
-static uint8_t can_go(const nnik_plan_t *pl, uint32_t c)
+static uint8_t can_go(nnik_plan_t *pl, uint32_t c)
 {
-    const nnik_pl_block_t *b = &pl->q[pl->head];
+    nnik_pl_block_t *b = &pl->q[pl->head];
     uint32_t r_um = pl->r_um;
     uint16_t r_fr = pl->r_fr;
     uint8_t k = 0;
     while (reaches(c, r_um, r_fr)) {
         uint32_t rem;
-        if (c > b->exit)
+        if (c > ve(b))
             return 0;
         b = &pl->q[IDX(pl, ++k)]; /* exit > 0: b is not the last block */
         rem = (r_um << 16) + r_fr + b->lfr; /* rem <= c < 2^24 */
@@ -252,12 +302,13 @@ void nnik_pl_sample(nnik_plan_t *pl, nnik_pl_sample_t *out)
     if (!can_go(pl, c)) {
         c = v < b->vn ? v : b->vn; /* hold (not at rest: the sample must move) */
         if (!c || !can_go(pl, c)) {
+            c = v > b->acc ? v - b->acc : 0;
+            fl = ve(b);
+            if (c < fl && fl < v && can_go(pl, fl))
+                c = fl; /* down to the exit if it may go at it */
             fl = b->acc >> 2;
             if (fl < 1)
                 fl = 1;
-            c = v > b->acc ? v - b->acc : 0;
-            if (c < b->exit && b->exit < v && can_go(pl, b->exit))
-                c = b->exit; /* down to the exit if it may go at it */
             if (c < fl)
                 c = fl;
         }
@@ -275,7 +326,7 @@ void nnik_pl_sample(nnik_plan_t *pl, nnik_pl_sample_t *out)
             pl->start[1] = b->end[1];
             pl->head = (uint8_t)(pl->head + 1 == NNIK_PL_N ? 0 : pl->head + 1);
             pl->count--;
-            if (!b->exit || !pl->count) { /* a stop: exactly on the end, at rest */
+            if (!b->e2 || !pl->count) { /* a stop: exactly on the end, at rest */
                 stop = 1;
                 c = 0;
                 pl->r_um = pl->q[pl->head].len; /* the next block (if any) starts from its start */

@@ -67,6 +67,7 @@ extern "C" {
 #endif
 #define NNIK_PL_DOT_MARGIN 8 /* Q30: the unit vectors' dot product less this is at most the exact cosine */
 #define NNIK_PL_REVERSAL 1073 /* Q30: a dot product within this of -1 is a reversal (grbl: 0.999999) */
+#define NNIK_PL_STALE 0xFFFFFFFFUL /* an exit speed not computed yet from its square */
 
 typedef struct {
     int32_t end[2];  /* um */
@@ -75,9 +76,9 @@ typedef struct {
     uint16_t lfr;    /* the length's fraction, Q16 (length = len + lfr / 65536 um, floor) */
     uint32_t vn;     /* nominal speed, Q16 um/sample */
     uint32_t acc;    /* Q16 um/sample^2 */
-    uint32_t dbig;   /* floor((2^32 - 1) / (2 acc)): the brake test's product fits 32 bits below it */
-    uint32_t jmax;   /* speed limit at the junction with the next block (0: none yet) */
-    uint32_t exit;   /* planned exit speed */
+    uint32_t j2;     /* the junction with the next block: its speed limit squared, Q16 (0: none yet) */
+    uint32_t e2;     /* planned exit speed squared, Q16 (um^2 / sample^2 * 65536) */
+    uint32_t exit;   /* planned exit speed, floor(sqrt(e2 2^16)) (NNIK_PL_STALE: not computed yet) */
     uint16_t tool;   /* the tool word of the block (duty | 0x100 for M4) */
 } nnik_pl_block_t;
 

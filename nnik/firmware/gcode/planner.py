@@ -41,8 +41,9 @@ class Block:
     tool: int
     index: int  # the push's index in the job (its move is the interpreter's)
     lfr: int = 0  # the length's fraction, Q16: the length is len + lfr / 65536 um (floor)
-    jmax: int = 0
-    exit: int = 0
+    j2: int = 0  # the junction with the next block: its speed limit squared, Q16
+    e2: int = 0  # the exit speed squared, Q16
+    exit: int = 0  # floor(sqrt(e2 2^16)) (the chip computes it when the sampler first asks)
 
     @property
     def l16(self) -> int:
@@ -68,9 +69,9 @@ def length_q(dx: int, dy: int) -> tuple[int, int, int]:
 
 
 def junction(a: Block, b: Block, cfg: MachineConfig) -> int:
-    """The speed limit at the junction a -> b (nnik_plan.c junction())."""
+    """The square of the speed limit at the junction a -> b, Q16 (nnik_plan.c junction())."""
     dot = ((a.u[0] * b.u[0] + a.u[1] * b.u[1]) >> 30) - DOT_MARGIN
-    lim = min(a.vn, b.vn)
+    lim = min(a.vn, b.vn) ** 2 >> 16
     if dot <= -Q30 + REVERSAL:
         return 0  # a reversal
     if dot >= Q30 - REVERSAL:
@@ -80,8 +81,7 @@ def junction(a: Block, b: Block, cfg: MachineConfig) -> int:
     w = [abs(b.u[i] - a.u[i]) for i in range(2)]
     wn = isqrt(sum(max(c - 4, 0) ** 2 for c in w))
     aj = min(min(_acc_axis(acc, wn, c + 4) for acc, c in zip(cfg.acc_q16, w)), 0x7FFFFF)
-    vj2 = aj * cfg.junction_dev_um * r
-    return lim if vj2 >= lim * lim else isqrt(vj2)
+    return min(aj * cfg.junction_dev_um * r >> 16, lim)
 
 
 class Planner:
@@ -118,26 +118,23 @@ class Planner:
         lfr = (Lq >> (f - 16) if f >= 16 else Lq << (16 - f)) & 0xFFFF
         b = Block((x, y), u, Lq >> f, vn, acc, tool, index, lfr)
         if self.q:
-            self.q[-1].jmax = junction(self.q[-1], b, self.cfg)
+            self.q[-1].j2 = junction(self.q[-1], b, self.cfg)
         self.q.append(b)
         self.last = (x, y)
         self._backward()
 
     def _backward(self) -> None:
         q = self.q
-        q[-1].exit = 0
+        q[-1].e2 = q[-1].exit = 0
         for k in range(len(q) - 2, -1, -1):
             b, n = q[k], q[k + 1]
-            t, ex = n.acc * n.len + ((n.acc * n.lfr) >> 16), b.jmax
-            if t < 1 << 40:
-                e2 = n.exit * n.exit + (t << 17)
-                if ex * ex > e2:
-                    ex = isqrt(e2)
-            if ex < b.acc >> 2:
-                ex = 0  # below the sampler's floor: a stop
-            if ex == b.exit:
+            t = n.acc * n.len + ((n.acc * n.lfr) >> 16)  # acc L, Q16
+            e2 = min(n.e2 + 2 * t, b.j2, U32)
+            if e2 < (((b.acc >> 2) + 255) >> 8) ** 2:
+                e2 = 0  # below the sampler's floor acc >> 2: a stop
+            if e2 == b.e2:
                 return
-            b.exit = ex
+            b.e2, b.exit = e2, isqrt(e2 << 16)
 
     @staticmethod
     def _can_brake(c: int, rem: int, ve: int, acc: int) -> bool:
