@@ -41,7 +41,12 @@ uint32_t nnik_div64_32(uint32_t hi, uint32_t lo, uint32_t d)
 
 uint32_t nnik_isqrt64(uint64_t v)
 {
-    uint32_t hi = (uint32_t)(v >> 32), lo = (uint32_t)v, r, rl, tl;
+    return nnik_isqrt_hl((uint32_t)(v >> 32), (uint32_t)v);
+}
+
+uint32_t nnik_isqrt_hl(uint32_t hi, uint32_t lo)
+{
+    uint32_t r, rl, tl;
     uint8_t i, rx, tx;
     if (!hi)
         return nnik_isqrt32(lo); /* 32-bit arithmetic: far cheaper on AVR */

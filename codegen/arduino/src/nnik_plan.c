@@ -9,24 +9,36 @@
 #error "NNIK_PL_N must be 2..64"
 #endif
 
-#define IDX(pl, k) ((uint8_t)(((pl)->head + (k)) % NNIK_PL_N))
+#define IDX(pl, k) ((uint8_t)((uint8_t)((pl)->head + (k)) % NNIK_PL_N)) /* unsigned: no 16-bit division */
 #define Q30 (1L << 30)
 
 static uint32_t uabs32(int32_t v) { return v < 0 ? (uint32_t)0 - (uint32_t)v : (uint32_t)v; }
 
-/* floor(a * L / n), n > 0 (an axis' limit on the block's acceleration) */
+/* a * b = (the result) 2^32 + *lo, by 16-bit products */
+static uint32_t mul32(uint32_t a, uint32_t b, uint32_t *lo)
+{
+    uint16_t ah = (uint16_t)(a >> 16), al = (uint16_t)a, bh = (uint16_t)(b >> 16), bl = (uint16_t)b;
+    uint32_t ll = nnik_mul16(al, bl), m = nnik_mul16(ah, bl), m2 = nnik_mul16(al, bh), hh = nnik_mul16(ah, bh), t;
+    m += m2;
+    if (m < m2)
+        hh += 0x10000UL; /* the middle sum's carry: 2^48 */
+    t = ll + (m << 16);
+    hh += (m >> 16) + (t < ll);
+    *lo = t;
+    return hh;
+}
+
+/* floor(a * L / n), n > 0, at most 2^32 - 1 (an axis' limit on the block's acceleration) */
 #ifdef __GNUC__
 __attribute__((noinline))
 #endif
 static uint32_t acc_axis(uint32_t a, uint32_t L, uint32_t n)
 {
+    uint32_t hi, lo;
     if (L < 0x400UL && a < 0x400000UL) /* a * L < 2^32 */
         return a * L / n;
-    {
-        uint64_t p = (uint64_t)a * L;
-        uint32_t hi = (uint32_t)(p >> 32);
-        return hi >= n ? 0xFFFFFFFFUL : nnik_div64_32(hi, (uint32_t)p, n); /* hi >= n: a quotient >= 2^32 */
-    }
+    hi = mul32(a, L, &lo);
+    return hi >= n ? 0xFFFFFFFFUL : nnik_div64_32(hi, lo, n); /* hi >= n: a quotient >= 2^32 */
 }
 
 void nnik_pl_init(nnik_plan_t *pl, const int32_t p[2])
@@ -87,38 +99,93 @@ static uint32_t add_sat(uint32_t a, uint32_t b)
     return a < b ? 0xFFFFFFFFUL : a;
 }
 
+/* floor((a0 b0 + a1 b1) / 2^30), |a_i|, |b_i| <= 2^30, by 16-bit products (no 64-bit arithmetic) */
+static int32_t dot30(const int32_t a[2], const int32_t b[2])
+{
+    uint32_t h0, l0, h1, l1, q;
+    uint8_t n0 = (a[0] < 0) != (b[0] < 0), n1 = (a[1] < 0) != (b[1] < 0);
+    h0 = mul32(uabs32(a[0]), uabs32(b[0]), &l0);
+    h1 = mul32(uabs32(a[1]), uabs32(b[1]), &l1);
+    if (n0 == n1) { /* |sum| = |p0| + |p1| */
+        l0 += l1;
+        h0 += h1 + (l0 < l1);
+    } else if (h0 > h1 || (h0 == h1 && l0 >= l1)) { /* |p0| - |p1| with p0's sign */
+        h0 -= h1 + (l0 < l1);
+        l0 -= l1;
+    } else { /* |p1| - |p0| with p1's sign */
+        h0 = h1 - h0 - (l1 < l0);
+        l0 = l1 - l0;
+        n0 = n1;
+    }
+    q = (h0 << 2) | ((uint8_t)(l0 >> 24) >> 6); /* |sum| >> 30, by its top byte */
+    if (!n0)
+        return (int32_t)q;
+    return -(int32_t)(q + ((l0 & 0x3FFFFFFFUL) != 0)); /* floor of a negative */
+}
+
 /* the square of the junction's speed limit between blocks a and b (b follows a), Q16: see nnik_plan.h */
 static uint32_t junction(const nnik_pl_block_t *a, const nnik_pl_block_t *b)
 {
-    int64_t dot = (((int64_t)a->u[0] * b->u[0] + (int64_t)a->u[1] * b->u[1]) >> 30) - NNIK_PL_DOT_MARGIN;
-    uint32_t lim = a->vn < b->vn ? a->vn : b->vn, sn, r, w[2], wn, aj;
-    uint64_t vj2 = 0;
-    uint8_t i;
+    int32_t dot = dot30(a->u, b->u) - NNIK_PL_DOT_MARGIN;
+    uint32_t lim = a->vn < b->vn ? a->vn : b->vn, sn, r, hi[2], lo[2], wl, w2, aj, m;
+    uint8_t i, k = 0, e;
     if (dot <= -Q30 + NNIK_PL_REVERSAL)
         return 0; /* a reversal: stop */
     lim = mul_sh16_sat(lim, lim);
     if (dot >= Q30 - NNIK_PL_REVERSAL)
         return lim; /* straight on */
-    sn = nnik_isqrt64((uint64_t)(Q30 + dot) << 29);
-    r = acc_axis(sn, 0x10000UL, (uint32_t)Q30 - sn);
-    if (r > 0x7FFFFFFFUL)
-        r = 0x7FFFFFFFUL;
-    for (i = 0; i < 2; i++) { /* |w| from the components less their error, each over its own plus it */
-        int64_t d = (int64_t)b->u[i] - a->u[i];
-        uint32_t t;
-        w[i] = (uint32_t)(d < 0 ? -d : d);
-        t = w[i] > 4 ? w[i] - 4 : 0;
-        vj2 += (uint64_t)t * t;
+    sn = nnik_isqrt32((uint32_t)(Q30 + dot) << 1); /* sin(theta / 2), Q16 */
+    for (i = 0; i < 2; i++) { /* |w_i| + 4 and less 4: above and below the exact w = u2 - u1 */
+        int32_t d = b->u[i] - a->u[i]; /* |u| <= 2^30: no overflow */
+        uint32_t t = uabs32(d);
+        hi[i] = t + 4;
+        lo[i] = t > 4 ? t - 4 : 0;
     }
-    wn = nnik_isqrt64(vj2);
-    aj = acc_axis(NNIK_GC_ACC_X, wn, w[0] + 4);
-    wn = acc_axis(NNIK_GC_ACC_Y, wn, w[1] + 4);
-    if (wn < aj)
-        aj = wn;
+    for (m = hi[0] > hi[1] ? hi[0] : hi[1]; m >= 0x8000UL; m >>= 1)
+        k++;
+    for (i = 0; i < 2; i++) { /* to 15 bits: hi rounded up, lo down */
+        hi[i] = (hi[i] + (1UL << k) - 1) >> k;
+        lo[i] >>= k;
+    }
+    w2 = nnik_mul16((uint16_t)hi[0], (uint16_t)hi[0]) + nnik_mul16((uint16_t)hi[1], (uint16_t)hi[1]);
+    wl = nnik_isqrt32(nnik_mul16((uint16_t)lo[0], (uint16_t)lo[0]) + nnik_mul16((uint16_t)lo[1], (uint16_t)lo[1]));
+    /* the junction's acceleration: the axis limit along w, min_i a_i |w| / |w_i|, on the axis
+     * that binds (a_x hi_y < a_y hi_x: x) */
+#if NNIK_GC_ACC_X == NNIK_GC_ACC_Y
+    i = hi[0] < hi[1];
+#else
+    {
+        uint32_t xl, yl, xh = mul32(NNIK_GC_ACC_X, hi[1], &xl), yh = mul32(NNIK_GC_ACC_Y, hi[0], &yl);
+        i = xh > yh || (xh == yh && xl > yl);
+    }
+#endif
+    aj = acc_axis(i ? NNIK_GC_ACC_Y : NNIK_GC_ACC_X, wl, hi[i]);
     if (aj > 0x7FFFFFUL)
         aj = 0x7FFFFFUL;
-    wn = mul_sh16_sat(mul_sat(aj, NNIK_GC_JDEV_UM), r);
-    return wn < lim ? wn : lim;
+    /* r = sin / (1 - sin) = 4 sin (1 + sin) / |w|^2, Q16: S 2^e / w2, S = sin (1 + sin) Q32
+     * (33 bits: sh 2^32 + sl), e = 46 - 2k (12..46); 2^31 - 1 when the quotient is 2^31 or more */
+    {
+        uint32_t sl = (sn << 16) + nnik_mul16((uint16_t)sn, (uint16_t)sn), nh, nl;
+        uint8_t sh = sl < (sn << 16);
+        e = (uint8_t)(46 - 2 * k);
+        if (e >= 31) { /* S 2^(e - 31) >= w2 <=> S >= ceil(w2 / 2^(e - 31)) */
+            uint8_t x = (uint8_t)(e - 31);
+            r = (sh || sl >= ((w2 + (1UL << x) - 1) >> x)) ? 0x7FFFFFFFUL : 0;
+        } else
+            r = 0;
+        if (!r) { /* N = S 2^e < 2^62 */
+            if (e >= 32) {
+                nh = sl << (e - 32);
+                nl = 0;
+            } else {
+                nh = ((uint32_t)sh << e) | (sl >> (32 - e));
+                nl = sl << e;
+            }
+            r = ((nh << 1) | (nl >> 31)) >= w2 ? 0x7FFFFFFFUL : nnik_div64_32(nh, nl, w2);
+        }
+    }
+    r = mul_sh16_sat(mul_sat(aj, NNIK_GC_JDEV_UM), r);
+    return r < lim ? r : lim;
 }
 
 /* squared exit speeds from the last block back (no square root); stops where one does not change */
@@ -150,36 +217,46 @@ static void backward(nnik_plan_t *pl)
 void nnik_pl_push(nnik_plan_t *pl, int32_t x, int32_t y, int32_t feed, uint16_t tool)
 {
     int32_t dx = x - pl->last[0], dy = y - pl->last[1];
-    uint32_t ax = uabs32(dx), ay = uabs32(dy), Lq, Lc, acc = 0xFFFFFFFFUL, a;
-    uint64_t m;
+    uint32_t ax = uabs32(dx), ay = uabs32(dy), Lq, Lc;
+    uint32_t m;
     uint8_t f = 0;
     nnik_pl_block_t *b;
     if (!dx && !dy)
         return;
-    m = (uint64_t)ax * ax + (uint64_t)ay * ay;
-    { /* m = n 4^f in [2^60, 2^62): sqrt(n) 2^f to 31 bits; f from n's bit length, one shift */
-        uint32_t top = (uint32_t)(m >> 32);
-        uint8_t bits = top ? 32 : 0;
-        if (!top)
-            top = (uint32_t)m;
+    { /* m = n 4^f in [2^60, 2^62): sqrt(n) 2^f to 31 bits; f from n's bit length; the components
+       * shifted by f, then squared: the same m */
+        uint32_t lo, top = mul32(ax, ax, &lo), l2;
+        uint8_t bits = 0;
+        top += mul32(ay, ay, &l2);
+        lo += l2;
+        top += lo < l2;
+        if (top)
+            bits = 32;
+        else
+            top = lo;
         while (top) {
             top >>= 1;
             bits++;
         }
-        if (bits < 61) {
+        if (bits < 61)
             f = (uint8_t)((62 - bits) >> 1);
-            m <<= 2 * f;
-        }
+        ax <<= f;
+        ay <<= f;
+        top = mul32(ax, ax, &lo);
+        top += mul32(ay, ay, &l2);
+        lo += l2;
+        top += lo < l2;
+        Lq = nnik_isqrt_hl(top, lo);
+        l2 = mul32(Lq, Lq, &m);
+        Lc = Lq + (l2 != top || m != lo); /* >= sqrt(n) 2^f: |u| <= 1 */
     }
-    Lq = nnik_isqrt64(m);
-    Lc = Lq + ((uint64_t)Lq * Lq != m); /* >= sqrt(n) 2^f: |u| <= 1 */
     b = &pl->q[IDX(pl, pl->count)];
     b->end[0] = x;
     b->end[1] = y;
     b->len = Lq >> f;
     b->lfr = (uint16_t)(f >= 16 ? Lq >> (f - 16) : Lq << (16 - f));
-    b->u[0] = (int32_t)acc_axis(ax << f, Q30, Lc);
-    b->u[1] = (int32_t)acc_axis(ay << f, Q30, Lc);
+    b->u[0] = (int32_t)nnik_div64_32(ax >> 2, ax << 30, Lc); /* (|d| 2^f 2^30) / Lc, |d| 2^f <= Lc */
+    b->u[1] = (int32_t)nnik_div64_32(ay >> 2, ay << 30, Lc);
     if (dx < 0)
         b->u[0] = -b->u[0];
     if (dy < 0)
@@ -191,14 +268,15 @@ void nnik_pl_push(nnik_plan_t *pl, int32_t x, int32_t y, int32_t feed, uint16_t 
         pl->feed_vn = (uint32_t)(((uint64_t)(uint32_t)feed << 16) / (60UL * NNIK_GC_SAMPLE_HZ));
     }
     b->vn = pl->feed_vn;
-    if (ax)
-        acc = acc_axis(NNIK_GC_ACC_X, Lq, ax << f);
-    if (ay) {
-        a = acc_axis(NNIK_GC_ACC_Y, Lq, ay << f);
-        if (a < acc)
-            acc = a;
+    /* the smallest of a_i Lq / |d_i| (the moving axes): on the axis that binds, a_x |d_y| <= a_y |d_x|: x */
+#if NNIK_GC_ACC_X == NNIK_GC_ACC_Y
+    b->acc = ax >= ay ? acc_axis(NNIK_GC_ACC_X, Lq, ax) : acc_axis(NNIK_GC_ACC_Y, Lq, ay);
+#else
+    {
+        uint32_t xl, yl, xh = mul32(NNIK_GC_ACC_X, ay, &xl), yh = mul32(NNIK_GC_ACC_Y, ax, &yl);
+        b->acc = (xh < yh || (xh == yh && xl <= yl)) ? acc_axis(NNIK_GC_ACC_X, Lq, ax) : acc_axis(NNIK_GC_ACC_Y, Lq, ay);
     }
-    b->acc = acc;
+#endif
     b->tool = tool;
     b->j2 = 0;
     b->e2 = 0;
@@ -234,7 +312,7 @@ static uint16_t shr9(uint32_t t)
 static uint32_t ve(nnik_pl_block_t *b)
 {
     if (b->exit == NNIK_PL_STALE)
-        b->exit = nnik_isqrt64((uint64_t)b->e2 << 16);
+        b->exit = nnik_isqrt_hl(b->e2 >> 16, b->e2 << 16);
     return b->exit;
 }
 

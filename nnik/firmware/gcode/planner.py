@@ -76,12 +76,17 @@ def junction(a: Block, b: Block, cfg: MachineConfig) -> int:
         return 0  # a reversal
     if dot >= Q30 - REVERSAL:
         return lim  # straight on
-    sn = isqrt((Q30 + dot) << 29)
-    r = min((sn << 16) // (Q30 - sn), R_MAX)
+    sn = isqrt((Q30 + dot) << 1)  # sin(theta / 2), Q16
     w = [abs(b.u[i] - a.u[i]) for i in range(2)]
-    wn = isqrt(sum(max(c - 4, 0) ** 2 for c in w))
-    aj = min(min(_acc_axis(acc, wn, c + 4) for acc, c in zip(cfg.acc_q16, w)), 0x7FFFFF)
-    return min(aj * cfg.junction_dev_um * r >> 16, lim)
+    hi, lo = [c + 4 for c in w], [max(c - 4, 0) for c in w]
+    k = 0
+    while max(hi) >> k >= 0x8000:
+        k += 1
+    hi, lo = [-(-c >> k) for c in hi], [c >> k for c in lo]
+    w2, wl = hi[0] ** 2 + hi[1] ** 2, isqrt(lo[0] ** 2 + lo[1] ** 2)
+    aj = min(min(_acc_axis(acc, wl, c) for acc, c in zip(cfg.acc_q16, hi)), 0x7FFFFF)
+    r = min((sn * (0x10000 + sn) << (46 - 2 * k)) // w2, R_MAX)  # 4 sin (1 + sin) / |w|^2, Q16
+    return min(min(aj * cfg.junction_dev_um, U32) * r >> 16, U32, lim)
 
 
 class Planner:
