@@ -15,6 +15,9 @@
 static uint32_t uabs32(int32_t v) { return v < 0 ? (uint32_t)0 - (uint32_t)v : (uint32_t)v; }
 
 /* a * b = (the result) 2^32 + *lo, by 16-bit products */
+#ifdef __GNUC__
+__attribute__((noinline))
+#endif
 static uint32_t mul32(uint32_t a, uint32_t b, uint32_t *lo)
 {
     uint16_t ah = (uint16_t)(a >> 16), al = (uint16_t)a, bh = (uint16_t)(b >> 16), bl = (uint16_t)b;
@@ -58,39 +61,18 @@ uint8_t nnik_pl_ready(const nnik_plan_t *pl, uint8_t flushing)
     return pl->count == NNIK_PL_N || (flushing && pl->count);
 }
 
-/* min(a * b, 2^32 - 1) by 16-bit products */
+/* min(a * b, 2^32 - 1) */
 static uint32_t mul_sat(uint32_t a, uint32_t b)
 {
-    uint16_t ah = (uint16_t)(a >> 16), al = (uint16_t)a, bh = (uint16_t)(b >> 16), bl = (uint16_t)b;
-    uint32_t p, q;
-    if (ah && bh)
-        return 0xFFFFFFFFUL;
-    p = nnik_mul16(ah, bl) + nnik_mul16(al, bh); /* one of them is 0: < 2^32 */
-    if (p >> 16)
-        return 0xFFFFFFFFUL;
-    q = nnik_mul16(al, bl);
-    p = (p << 16) + q;
-    return p < q ? 0xFFFFFFFFUL : p;
+    uint32_t lo;
+    return mul32(a, b, &lo) ? 0xFFFFFFFFUL : lo;
 }
 
-/* min(floor(a * b / 2^16), 2^32 - 1) by 16-bit products */
+/* min(floor(a * b / 2^16), 2^32 - 1) */
 static uint32_t mul_sh16_sat(uint32_t a, uint32_t b)
 {
-    uint16_t ah = (uint16_t)(a >> 16), al = (uint16_t)a, bh = (uint16_t)(b >> 16), bl = (uint16_t)b;
-    uint32_t s = nnik_mul16(ah, bh), t;
-    if (s >> 16)
-        return 0xFFFFFFFFUL;
-    s <<= 16;
-    t = nnik_mul16(ah, bl);
-    if ((s += t) < t)
-        return 0xFFFFFFFFUL;
-    t = nnik_mul16(al, bh);
-    if ((s += t) < t)
-        return 0xFFFFFFFFUL;
-    t = nnik_mul16(al, bl) >> 16;
-    if ((s += t) < t)
-        return 0xFFFFFFFFUL;
-    return s;
+    uint32_t lo, hi = mul32(a, b, &lo);
+    return hi >> 16 ? 0xFFFFFFFFUL : (hi << 16) | (lo >> 16);
 }
 
 static uint32_t add_sat(uint32_t a, uint32_t b)
@@ -99,34 +81,10 @@ static uint32_t add_sat(uint32_t a, uint32_t b)
     return a < b ? 0xFFFFFFFFUL : a;
 }
 
-/* floor((a0 b0 + a1 b1) / 2^30), |a_i|, |b_i| <= 2^30, by 16-bit products (no 64-bit arithmetic) */
-static int32_t dot30(const int32_t a[2], const int32_t b[2])
-{
-    uint32_t h0, l0, h1, l1, q;
-    uint8_t n0 = (a[0] < 0) != (b[0] < 0), n1 = (a[1] < 0) != (b[1] < 0);
-    h0 = mul32(uabs32(a[0]), uabs32(b[0]), &l0);
-    h1 = mul32(uabs32(a[1]), uabs32(b[1]), &l1);
-    if (n0 == n1) { /* |sum| = |p0| + |p1| */
-        l0 += l1;
-        h0 += h1 + (l0 < l1);
-    } else if (h0 > h1 || (h0 == h1 && l0 >= l1)) { /* |p0| - |p1| with p0's sign */
-        h0 -= h1 + (l0 < l1);
-        l0 -= l1;
-    } else { /* |p1| - |p0| with p1's sign */
-        h0 = h1 - h0 - (l1 < l0);
-        l0 = l1 - l0;
-        n0 = n1;
-    }
-    q = (h0 << 2) | ((uint8_t)(l0 >> 24) >> 6); /* |sum| >> 30, by its top byte */
-    if (!n0)
-        return (int32_t)q;
-    return -(int32_t)(q + ((l0 & 0x3FFFFFFFUL) != 0)); /* floor of a negative */
-}
-
 /* the square of the junction's speed limit between blocks a and b (b follows a), Q16: see nnik_plan.h */
 static uint32_t junction(const nnik_pl_block_t *a, const nnik_pl_block_t *b)
 {
-    int32_t dot = dot30(a->u, b->u) - NNIK_PL_DOT_MARGIN;
+    int32_t dot = (int32_t)((((int64_t)a->u[0] * b->u[0] + (int64_t)a->u[1] * b->u[1]) >> 30) - NNIK_PL_DOT_MARGIN);
     uint32_t lim = a->vn < b->vn ? a->vn : b->vn, sn, r, hi[2], lo[2], wl, w2, aj, m;
     uint8_t i, k = 0, e;
     if (dot <= -Q30 + NNIK_PL_REVERSAL)
@@ -162,27 +120,18 @@ static uint32_t junction(const nnik_pl_block_t *a, const nnik_pl_block_t *b)
     aj = acc_axis(i ? NNIK_GC_ACC_Y : NNIK_GC_ACC_X, wl, hi[i]);
     if (aj > 0x7FFFFFUL)
         aj = 0x7FFFFFUL;
-    /* r = sin / (1 - sin) = 4 sin (1 + sin) / |w|^2, Q16: S 2^e / w2, S = sin (1 + sin) Q32
-     * (33 bits: sh 2^32 + sl), e = 46 - 2k (12..46); 2^31 - 1 when the quotient is 2^31 or more */
+    /* r = sin / (1 - sin) = 4 sin (1 + sin) / |w|^2, Q16: floor(S 2^14 / w2) 2^(32 - 2k), S = sin (1 + sin)
+     * Q32 (33 bits: sh 2^32 + sl; w2 >= 2^28 when k > 0: the quotient holds 16 bits or more); at most 2^31 - 1 */
     {
-        uint32_t sl = (sn << 16) + nnik_mul16((uint16_t)sn, (uint16_t)sn), nh, nl;
+        uint32_t sl = (sn << 16) + nnik_mul16((uint16_t)sn, (uint16_t)sn);
         uint8_t sh = sl < (sn << 16);
-        e = (uint8_t)(46 - 2 * k);
-        if (e >= 31) { /* S 2^(e - 31) >= w2 <=> S >= ceil(w2 / 2^(e - 31)) */
-            uint8_t x = (uint8_t)(e - 31);
-            r = (sh || sl >= ((w2 + (1UL << x) - 1) >> x)) ? 0x7FFFFFFFUL : 0;
+        r = ((uint32_t)sh << 14) | (sl >> 18); /* S 2^14 = r 2^32 + (sl << 14) */
+        r = r >= w2 ? 0xFFFFFFFFUL : nnik_div64_32(r, sl << 14, w2);
+        if (k < 16) {
+            e = (uint8_t)(32 - 2 * k);
+            r = r > (0x7FFFFFFFUL >> e) ? 0x7FFFFFFFUL : r << e;
         } else
-            r = 0;
-        if (!r) { /* N = S 2^e < 2^62 */
-            if (e >= 32) {
-                nh = sl << (e - 32);
-                nl = 0;
-            } else {
-                nh = ((uint32_t)sh << e) | (sl >> (32 - e));
-                nl = sl << e;
-            }
-            r = ((nh << 1) | (nl >> 31)) >= w2 ? 0x7FFFFFFFUL : nnik_div64_32(nh, nl, w2);
-        }
+            r >>= 2 * k - 32;
     }
     r = mul_sh16_sat(mul_sat(aj, NNIK_GC_JDEV_UM), r);
     return r < lim ? r : lim;

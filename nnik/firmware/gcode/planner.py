@@ -85,7 +85,8 @@ def junction(a: Block, b: Block, cfg: MachineConfig) -> int:
     hi, lo = [-(-c >> k) for c in hi], [c >> k for c in lo]
     w2, wl = hi[0] ** 2 + hi[1] ** 2, isqrt(lo[0] ** 2 + lo[1] ** 2)
     aj = min(min(_acc_axis(acc, wl, c) for acc, c in zip(cfg.acc_q16, hi)), 0x7FFFFF)
-    r = min((sn * (0x10000 + sn) << (46 - 2 * k)) // w2, R_MAX)  # 4 sin (1 + sin) / |w|^2, Q16
+    r = (sn * (0x10000 + sn) << 14) // w2  # 4 sin (1 + sin) / |w|^2, Q16: this 2^(32 - 2k)
+    r = min(r << (32 - 2 * k), R_MAX) if k < 16 else r >> (2 * k - 32)
     return min(min(aj * cfg.junction_dev_um, U32) * r >> 16, U32, lim)
 
 
