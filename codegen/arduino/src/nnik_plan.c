@@ -54,6 +54,8 @@ void nnik_pl_init(nnik_plan_t *pl, const int32_t p[2])
     pl->v = 0;
     pl->feed = -1;
     pl->feed_vn = 0;
+    pl->hexit = 0;
+    pl->hstale = 1;
 }
 
 uint8_t nnik_pl_ready(const nnik_plan_t *pl, uint8_t flushing)
@@ -143,14 +145,13 @@ static void backward(nnik_plan_t *pl)
     int8_t k;
     nnik_pl_block_t *b = &pl->q[IDX(pl, pl->count - 1)];
     b->e2 = 0;
-    b->exit = 0;
+    if (pl->count == 1)
+        pl->hstale = 1;
     for (k = (int8_t)pl->count - 2; k >= 0; k--) {
         const nnik_pl_block_t *n = b;
         uint32_t ex2, g;
         b = &pl->q[IDX(pl, k)];
-        /* t = acc L (Q16): acc len + floor(acc lfr / 2^16); exit^2 <= next exit^2 + 2 t */
-        ex2 = add_sat(mul_sat(n->acc, n->len), mul_sh16_sat(n->acc, n->lfr));
-        ex2 = add_sat(n->e2, add_sat(ex2, ex2));
+        ex2 = add_sat(n->e2, n->t2); /* exit^2 <= next exit^2 + 2 acc L */
         if (ex2 > b->j2)
             ex2 = b->j2;
         g = ((b->acc >> 2) + 255) >> 8; /* an exit below acc >> 2 (the sampler's floor): a stop */
@@ -159,7 +160,8 @@ static void backward(nnik_plan_t *pl)
         if (ex2 == b->e2)
             return;
         b->e2 = ex2;
-        b->exit = ex2 ? NNIK_PL_STALE : 0;
+        if (!k)
+            pl->hstale = 1; /* the head's exit speed: to compute again */
     }
 }
 
@@ -229,7 +231,10 @@ void nnik_pl_push(nnik_plan_t *pl, int32_t x, int32_t y, int32_t feed, uint16_t 
     b->tool = tool;
     b->j2 = 0;
     b->e2 = 0;
-    b->exit = 0;
+    { /* 2 acc L, Q16: 2 (acc len + floor(acc lfr / 2^16)) */
+        uint32_t t = add_sat(mul_sat(b->acc, b->len), mul_sh16_sat(b->acc, b->lfr));
+        b->t2 = add_sat(t, t);
+    }
     if (pl->count)
         pl->q[IDX(pl, pl->count - 1)].j2 = junction(&pl->q[IDX(pl, pl->count - 1)], b);
     else { /* the head, from rest at its start */
@@ -257,48 +262,62 @@ static uint16_t shr9(uint32_t t)
     return (uint16_t)(((uint16_t)(t >> 16) << 7) | ((uint16_t)t >> 9));
 }
 
-/* the block's exit speed floor(sqrt(e2 2^16)), computed when first asked for after a change */
-static uint32_t ve(nnik_pl_block_t *b)
+/* the head block's exit speed floor(sqrt(e2 2^16)), computed when first asked for after a change */
+static uint32_t head_exit(nnik_plan_t *pl)
 {
-    if (b->exit == NNIK_PL_STALE)
-        b->exit = nnik_isqrt_hl(b->e2 >> 16, b->e2 << 16);
-    return b->exit;
+    if (pl->hstale) {
+        uint32_t e2 = pl->q[pl->head].e2;
+        pl->hexit = nnik_isqrt_hl(e2 >> 16, e2 << 16);
+        pl->hstale = 0;
+    }
+    return pl->hexit;
 }
 
-/* after moving c this sample (rem > c left), can the block still brake to its exit speed?
- * d = floor((rem - c) / 65536) by 32-bit pieces. */
-static uint8_t can_brake(uint32_t c, uint32_t r_um, uint16_t r_fr, nnik_pl_block_t *b)
+/* after moving c this sample (rem > c left, c above the exit speed), can the block still brake to
+ * its exit speed (eq = that speed >> 9)?  d = floor((rem - c) / 65536) by 32-bit pieces. */
+static uint8_t can_brake(uint32_t c, uint32_t r_um, uint16_t r_fr, uint32_t acc, uint32_t eq)
 {
-    uint32_t d, cq, eq, ex = ve(b), ch = c >> 16;
-    if (c <= ex)
-        return 1;
+    uint32_t d, cq, ch = c >> 16;
     if ((uint16_t)c > r_fr)
         ch++;
     d = r_um - ch;
     cq = shr9(c + 511); /* <= 2^15 */
-    eq = shr9(ex);
     /* 2 acc d saturates above 2^32 - 1 > any 4 ceil(c / 512)^2 */
-    return mul_sat(2 * b->acc, d) >= 4 * (nnik_mul16((uint16_t)cq, (uint16_t)cq) - nnik_mul16((uint16_t)eq, (uint16_t)eq));
+    return mul_sat(2 * acc, d) >= 4 * (nnik_mul16((uint16_t)cq, (uint16_t)cq) - nnik_mul16((uint16_t)eq, (uint16_t)eq));
 }
 
 /* may the sample go at c?  Each block end it reaches it passes at most at that block's exit
  * (never a stop's), and the block it ends in can still brake to its exit. */
 static uint8_t can_go(nnik_plan_t *pl, uint32_t c)
 {
-    nnik_pl_block_t *b = &pl->q[pl->head];
-    uint32_t r_um = pl->r_um;
+    const nnik_pl_block_t *b = &pl->q[pl->head];
+    uint32_t r_um = pl->r_um, c2 = 0, ex;
     uint16_t r_fr = pl->r_fr;
     uint8_t k = 0;
     while (reaches(c, r_um, r_fr)) {
         uint32_t rem;
-        if (c > ve(b))
+        if (!c2) { /* ceil(c^2 / 2^16) (c < 2^24): c > a block's exit speed exactly when this > its e2 */
+            c2 = mul32(c, c, &rem);
+            c2 = (c2 << 16) + (rem >> 16) + ((uint16_t)rem != 0);
+        }
+        if (c2 > b->e2)
             return 0;
         b = &pl->q[IDX(pl, ++k)]; /* exit > 0: b is not the last block */
         rem = (r_um << 16) + r_fr + b->lfr; /* rem <= c < 2^24 */
         r_fr = (uint16_t)rem;
         r_um = b->len + (rem >> 16);
     }
-    return can_brake(c, r_um, r_fr, b);
+    if (!k) {
+        ex = head_exit(pl);
+        if (c <= ex)
+            return 1;
+        ex = shr9(ex);
+    } else {
+        if (c2 <= b->e2)
+            return 1;
+        ex = nnik_isqrt32(b->e2 >> 2); /* floor(exit / 512) = floor(sqrt(floor(e2 2^16 / 2^18))) */
+    }
+    return can_brake(c, r_um, r_fr, b->acc, ex);
 }
 
 /* floor(u * s / 2^30), |u| <= 2^30, s < 2^29, by 16-bit products (no 64-bit arithmetic) */
@@ -330,7 +349,7 @@ void nnik_pl_sample(nnik_plan_t *pl, nnik_pl_sample_t *out)
         c = v < b->vn ? v : b->vn; /* hold (not at rest: the sample must move) */
         if (!c || !can_go(pl, c)) {
             c = v > b->acc ? v - b->acc : 0;
-            fl = ve(b);
+            fl = head_exit(pl);
             if (c < fl && fl < v && can_go(pl, fl))
                 c = fl; /* down to the exit if it may go at it */
             fl = b->acc >> 2;
@@ -353,6 +372,7 @@ void nnik_pl_sample(nnik_plan_t *pl, nnik_pl_sample_t *out)
             pl->start[1] = b->end[1];
             pl->head = (uint8_t)(pl->head + 1 == NNIK_PL_N ? 0 : pl->head + 1);
             pl->count--;
+            pl->hstale = 1;
             if (!b->e2 || !pl->count) { /* a stop: exactly on the end, at rest */
                 stop = 1;
                 c = 0;
