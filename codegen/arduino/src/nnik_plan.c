@@ -38,8 +38,6 @@ __attribute__((noinline))
 static uint32_t acc_axis(uint32_t a, uint32_t L, uint32_t n)
 {
     uint32_t hi, lo;
-    if (L < 0x400UL && a < 0x400000UL) /* a * L < 2^32 */
-        return a * L / n;
     hi = mul32(a, L, &lo);
     return hi >= n ? 0xFFFFFFFFUL : nnik_div64_32(hi, lo, n); /* hi >= n: a quotient >= 2^32 */
 }
@@ -54,7 +52,6 @@ void nnik_pl_init(nnik_plan_t *pl, const int32_t p[2])
     pl->v = 0;
     pl->feed = -1;
     pl->feed_vn = 0;
-    pl->hexit = 0;
     pl->hstale = 1;
 }
 
@@ -87,7 +84,7 @@ static uint32_t add_sat(uint32_t a, uint32_t b)
 static uint32_t junction(const nnik_pl_block_t *a, const nnik_pl_block_t *b)
 {
     int32_t dot = (int32_t)((((int64_t)a->u[0] * b->u[0] + (int64_t)a->u[1] * b->u[1]) >> 30) - NNIK_PL_DOT_MARGIN);
-    uint32_t lim = a->vn < b->vn ? a->vn : b->vn, sn, r, hi[2], lo[2], wl, w2, aj, m;
+    uint32_t lim = a->vn < b->vn ? a->vn : b->vn, sn, r, hi[2], lo[2], wl, w2, aj;
     uint8_t i, k = 0, e;
     if (dot <= -Q30 + NNIK_PL_REVERSAL)
         return 0; /* a reversal: stop */
@@ -101,11 +98,11 @@ static uint32_t junction(const nnik_pl_block_t *a, const nnik_pl_block_t *b)
         hi[i] = t + 4;
         lo[i] = t > 4 ? t - 4 : 0;
     }
-    for (m = hi[0] > hi[1] ? hi[0] : hi[1]; m >= 0x8000UL; m >>= 1)
-        k++;
-    for (i = 0; i < 2; i++) { /* to 15 bits: hi rounded up, lo down */
-        hi[i] = (hi[i] + (1UL << k) - 1) >> k;
-        lo[i] >>= k;
+    for (; (hi[0] | hi[1]) >= 0x8000UL; k++) { /* to 15 bits, halving: hi rounded up, lo down */
+        hi[0] = (hi[0] + 1) >> 1;
+        hi[1] = (hi[1] + 1) >> 1;
+        lo[0] >>= 1;
+        lo[1] >>= 1;
     }
     w2 = nnik_mul16((uint16_t)hi[0], (uint16_t)hi[0]) + nnik_mul16((uint16_t)hi[1], (uint16_t)hi[1]);
     wl = nnik_isqrt32(nnik_mul16((uint16_t)lo[0], (uint16_t)lo[0]) + nnik_mul16((uint16_t)lo[1], (uint16_t)lo[1]));
@@ -323,12 +320,8 @@ static uint8_t can_go(nnik_plan_t *pl, uint32_t c)
 /* floor(u * s / 2^30), |u| <= 2^30, s < 2^29, by 16-bit products (no 64-bit arithmetic) */
 static int32_t mul_q30(int32_t u, uint32_t s)
 {
-    uint32_t a = u < 0 ? (uint32_t)0 - (uint32_t)u : (uint32_t)u;
-    uint16_t ah = (uint16_t)(a >> 16), al = (uint16_t)a, sh = (uint16_t)(s >> 16), sl = (uint16_t)s;
-    uint32_t lo = nnik_mul16(al, sl), mid = nnik_mul16(ah, sl) + nnik_mul16(al, sh), hi = nnik_mul16(ah, sh);
-    uint32_t plo = lo + (mid << 16), q;
-    hi += (mid >> 16) + (plo < lo);
-    q = (hi << 2) | ((uint8_t)(plo >> 24) >> 6); /* plo >> 30 by its top byte: no 30-step shift loop */
+    uint32_t plo, q = mul32(uabs32(u), s, &plo); /* |u| s = q 2^32 + plo */
+    q = (q << 2) | ((uint8_t)(plo >> 24) >> 6); /* plo >> 30 by its top byte: no 30-step shift loop */
     if (u >= 0)
         return (int32_t)q;
     return -(int32_t)(q + ((plo & 0x3FFFFFFFUL) != 0));

@@ -80,9 +80,8 @@ def junction(a: Block, b: Block, cfg: MachineConfig) -> int:
     w = [abs(b.u[i] - a.u[i]) for i in range(2)]
     hi, lo = [c + 4 for c in w], [max(c - 4, 0) for c in w]
     k = 0
-    while max(hi) >> k >= 0x8000:
-        k += 1
-    hi, lo = [-(-c >> k) for c in hi], [c >> k for c in lo]
+    while max(hi) >= 0x8000:  # to 15 bits, halving: hi rounded up, lo down
+        hi, lo, k = [(c + 1) >> 1 for c in hi], [c >> 1 for c in lo], k + 1
     w2, wl = hi[0] ** 2 + hi[1] ** 2, isqrt(lo[0] ** 2 + lo[1] ** 2)
     aj = min(min(_acc_axis(acc, wl, c) for acc, c in zip(cfg.acc_q16, hi)), 0x7FFFFF)
     r = (sn * (0x10000 + sn) << 14) // w2  # 4 sin (1 + sin) / |w|^2, Q16: this 2^(32 - 2k)
