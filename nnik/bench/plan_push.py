@@ -65,14 +65,14 @@ def header(cfg: MachineConfig) -> str:
     return "\n".join(lines + ["#endif", ""])
 
 
-def push_cycles(ops: list[tuple], cfg: MachineConfig, workdir: Path) -> np.ndarray:
-    """Cycles of each push on simavr (the ATmega328P at 16 MHz, -Os)."""
+def push_cycles(ops: list[tuple], cfg: MachineConfig, workdir: Path, src: Path = SRC) -> np.ndarray:
+    """Cycles of each push on simavr (the ATmega328P at 16 MHz, -Os), with the planner's C from src."""
     workdir.mkdir(parents=True, exist_ok=True)
     (workdir / "nnik_gcode_config.h").write_text(header(cfg))
     wrap = workdir / "plpush.c"
     wrap.write_text(WRAP)
     rows, push = vectors(ops)
-    r = run_avr([wrap, SRC / "nnik_plan.c", SRC / "nnik_imath.c"], [workdir, SRC], "plpush", rows, workdir=workdir,
+    r = run_avr([wrap, src / "nnik_plan.c", src / "nnik_imath.c"], [workdir, src], "plpush", rows, workdir=workdir,
                 n_out=2, progress=False, batch_size=4000)
     return r["cycles"][push]
 
@@ -86,14 +86,41 @@ def paths(cfg: MachineConfig) -> dict[str, list[tuple]]:
                                               feed)}
 
 
+def job_paths(scenario: str, jobs: list[str], plan_blocks: int) -> tuple[MachineConfig, dict[str, list[tuple]]]:
+    """The shipped jobs' planner operations on a shipped scenario's machine (as `nnik job` sends them)."""
+    from dataclasses import replace
+
+    from nnik.firmware.config import default_machine
+    from nnik.firmware.gcode.job_input import JobOptions, prepare, read_job
+    from nnik.firmware.gcode.motion import interpret
+    from nnik.firmware.gcode.reader import sendable
+    from nnik.machine.scenario import load_scenario
+
+    root = Path(__file__).resolve().parents[2] / "datasets"
+    cfg = replace(default_machine(load_scenario(root / f"{scenario}.toml")), plan_blocks=plan_blocks, bounds_um=None)
+    out = {}
+    for job in jobs:
+        path = root / "jobs" / f"{job}.gcode"
+        lines = [sendable(ln).decode("latin-1") for ln in prepare(read_job(path), cfg, JobOptions(), str(path)).lines]
+        out[job] = interpret(lines, cfg).ops
+    return cfg, out
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--plan-blocks", type=int, default=8)
+    ap.add_argument("--scenario", help="a shipped scenario whose machine runs --jobs (default: synthetic paths)")
+    ap.add_argument("--jobs", default="circle,star,l_path", help="shipped jobs (datasets/jobs), comma-separated")
+    ap.add_argument("--src", type=Path, default=SRC, help="the planner's C sources (another checkout's, to compare)")
     a = ap.parse_args(argv)
-    cfg = MachineConfig(origin_um=(0, 0), plan_blocks=a.plan_blocks)
+    if a.scenario:
+        cfg, todo = job_paths(a.scenario, a.jobs.split(","), a.plan_blocks)
+    else:
+        cfg = MachineConfig(origin_um=(0, 0), plan_blocks=a.plan_blocks)
+        todo = paths(cfg)
     with tempfile.TemporaryDirectory(prefix="nnik-plpush-") as d:
-        for k, (name, ops) in enumerate(paths(cfg).items()):
-            c = push_cycles(ops, cfg, Path(d) / str(k))
+        for k, (name, ops) in enumerate(todo.items()):
+            c = push_cycles(ops, cfg, Path(d) / str(k), a.src)
             print(f"{name:24s} pushes {len(c):5d}  cycles a push: mean {c.mean():8.0f}  max {c.max():7d}")
     return 0
 
