@@ -14,21 +14,16 @@
 
 static uint32_t uabs32(int32_t v) { return v < 0 ? (uint32_t)0 - (uint32_t)v : (uint32_t)v; }
 
-/* a * b = (the result) 2^32 + *lo, by 16-bit products */
+/* a * b = (the result) 2^32 + *lo (libgcc's 32 x 32 -> 64 product, linked anyway: small and as
+ * fast as 16-bit pieces; one function, so each call site stays small) */
 #ifdef __GNUC__
 __attribute__((noinline))
 #endif
 static uint32_t mul32(uint32_t a, uint32_t b, uint32_t *lo)
 {
-    uint16_t ah = (uint16_t)(a >> 16), al = (uint16_t)a, bh = (uint16_t)(b >> 16), bl = (uint16_t)b;
-    uint32_t ll = nnik_mul16(al, bl), m = nnik_mul16(ah, bl), m2 = nnik_mul16(al, bh), hh = nnik_mul16(ah, bh), t;
-    m += m2;
-    if (m < m2)
-        hh += 0x10000UL; /* the middle sum's carry: 2^48 */
-    t = ll + (m << 16);
-    hh += (m >> 16) + (t < ll);
-    *lo = t;
-    return hh;
+    uint64_t p = (uint64_t)a * b;
+    *lo = (uint32_t)p;
+    return (uint32_t)(p >> 32);
 }
 
 /* floor(a * L / n), n > 0, at most 2^32 - 1 (an axis' limit on the block's acceleration) */
@@ -52,7 +47,6 @@ void nnik_pl_init(nnik_plan_t *pl, const int32_t p[2])
     pl->v = 0;
     pl->feed = -1;
     pl->feed_vn = 0;
-    pl->hstale = 1;
 }
 
 uint8_t nnik_pl_ready(const nnik_plan_t *pl, uint8_t flushing)
@@ -84,7 +78,7 @@ static uint32_t add_sat(uint32_t a, uint32_t b)
 static uint32_t junction(const nnik_pl_block_t *a, const nnik_pl_block_t *b)
 {
     int32_t dot = (int32_t)((((int64_t)a->u[0] * b->u[0] + (int64_t)a->u[1] * b->u[1]) >> 30) - NNIK_PL_DOT_MARGIN);
-    uint32_t lim = a->vn < b->vn ? a->vn : b->vn, sn, r, hi[2], lo[2], wl, w2, aj;
+    uint32_t lim = a->vn < b->vn ? a->vn : b->vn, sn, r, hi[2], wl, w2, aj;
     uint8_t i, k = 0, e;
     if (dot <= -Q30 + NNIK_PL_REVERSAL)
         return 0; /* a reversal: stop */
@@ -92,20 +86,16 @@ static uint32_t junction(const nnik_pl_block_t *a, const nnik_pl_block_t *b)
     if (dot >= Q30 - NNIK_PL_REVERSAL)
         return lim; /* straight on */
     sn = nnik_isqrt32((uint32_t)(Q30 + dot) << 1); /* sin(theta / 2), Q16 */
-    for (i = 0; i < 2; i++) { /* |w_i| + 4 and less 4: above and below the exact w = u2 - u1 */
-        int32_t d = b->u[i] - a->u[i]; /* |u| <= 2^30: no overflow */
-        uint32_t t = uabs32(d);
-        hi[i] = t + 4;
-        lo[i] = t > 4 ? t - 4 : 0;
-    }
-    for (; (hi[0] | hi[1]) >= 0x8000UL; k++) { /* to 15 bits, halving: hi rounded up, lo down */
+    hi[0] = uabs32(b->u[0] - a->u[0]) + 4; /* |w_i| + 4 >= the exact w = u2 - u1's (|u| <= 2^30: no overflow) */
+    hi[1] = uabs32(b->u[1] - a->u[1]) + 4;
+    for (; (hi[0] | hi[1]) >= 0x8000UL; k++) { /* to 15 bits, halving, rounded up */
         hi[0] = (hi[0] + 1) >> 1;
         hi[1] = (hi[1] + 1) >> 1;
-        lo[0] >>= 1;
-        lo[1] >>= 1;
     }
+    /* each hi_i is at most the exact |w_i| 2^-k + 9: |hi| - 13 <= |w| 2^-k */
     w2 = nnik_mul16((uint16_t)hi[0], (uint16_t)hi[0]) + nnik_mul16((uint16_t)hi[1], (uint16_t)hi[1]);
-    wl = nnik_isqrt32(nnik_mul16((uint16_t)lo[0], (uint16_t)lo[0]) + nnik_mul16((uint16_t)lo[1], (uint16_t)lo[1]));
+    wl = nnik_isqrt32(w2);
+    wl = wl > 13 ? wl - 13 : 0;
     /* the junction's acceleration: the axis limit along w, min_i a_i |w| / |w_i|, on the axis
      * that binds (a_x hi_y < a_y hi_x: x) */
 #if NNIK_GC_ACC_X == NNIK_GC_ACC_Y
@@ -142,13 +132,14 @@ static void backward(nnik_plan_t *pl)
     int8_t k;
     nnik_pl_block_t *b = &pl->q[IDX(pl, pl->count - 1)];
     b->e2 = 0;
-    if (pl->count == 1)
-        pl->hstale = 1;
+    b->exit = 0;
     for (k = (int8_t)pl->count - 2; k >= 0; k--) {
         const nnik_pl_block_t *n = b;
         uint32_t ex2, g;
         b = &pl->q[IDX(pl, k)];
-        ex2 = add_sat(n->e2, n->t2); /* exit^2 <= next exit^2 + 2 acc L */
+        /* t = acc L (Q16): acc len + floor(acc lfr / 2^16); exit^2 <= next exit^2 + 2 t */
+        ex2 = add_sat(mul_sat(n->acc, n->len), mul_sh16_sat(n->acc, n->lfr));
+        ex2 = add_sat(n->e2, add_sat(ex2, ex2));
         if (ex2 > b->j2)
             ex2 = b->j2;
         g = ((b->acc >> 2) + 255) >> 8; /* an exit below acc >> 2 (the sampler's floor): a stop */
@@ -157,8 +148,7 @@ static void backward(nnik_plan_t *pl)
         if (ex2 == b->e2)
             return;
         b->e2 = ex2;
-        if (!k)
-            pl->hstale = 1; /* the head's exit speed: to compute again */
+        b->exit = ex2 ? NNIK_PL_STALE : 0; /* its square root: when the sampler first asks */
     }
 }
 
@@ -228,10 +218,7 @@ void nnik_pl_push(nnik_plan_t *pl, int32_t x, int32_t y, int32_t feed, uint16_t 
     b->tool = tool;
     b->j2 = 0;
     b->e2 = 0;
-    { /* 2 acc L, Q16: 2 (acc len + floor(acc lfr / 2^16)) */
-        uint32_t t = add_sat(mul_sat(b->acc, b->len), mul_sh16_sat(b->acc, b->lfr));
-        b->t2 = add_sat(t, t);
-    }
+    b->exit = 0;
     if (pl->count)
         pl->q[IDX(pl, pl->count - 1)].j2 = junction(&pl->q[IDX(pl, pl->count - 1)], b);
     else { /* the head, from rest at its start */
@@ -259,62 +246,48 @@ static uint16_t shr9(uint32_t t)
     return (uint16_t)(((uint16_t)(t >> 16) << 7) | ((uint16_t)t >> 9));
 }
 
-/* the head block's exit speed floor(sqrt(e2 2^16)), computed when first asked for after a change */
-static uint32_t head_exit(nnik_plan_t *pl)
+/* the block's exit speed floor(sqrt(e2 2^16)), computed when first asked for after a change */
+static uint32_t ve(nnik_pl_block_t *b)
 {
-    if (pl->hstale) {
-        uint32_t e2 = pl->q[pl->head].e2;
-        pl->hexit = nnik_isqrt_hl(e2 >> 16, e2 << 16);
-        pl->hstale = 0;
-    }
-    return pl->hexit;
+    if (b->exit == NNIK_PL_STALE)
+        b->exit = nnik_isqrt_hl(b->e2 >> 16, b->e2 << 16);
+    return b->exit;
 }
 
-/* after moving c this sample (rem > c left, c above the exit speed), can the block still brake to
- * its exit speed (eq = that speed >> 9)?  d = floor((rem - c) / 65536) by 32-bit pieces. */
-static uint8_t can_brake(uint32_t c, uint32_t r_um, uint16_t r_fr, uint32_t acc, uint32_t eq)
+/* after moving c this sample (rem > c left), can the block still brake to its exit speed?
+ * d = floor((rem - c) / 65536) by 32-bit pieces. */
+static uint8_t can_brake(uint32_t c, uint32_t r_um, uint16_t r_fr, nnik_pl_block_t *b)
 {
-    uint32_t d, cq, ch = c >> 16;
+    uint32_t d, cq, eq, ex = ve(b), ch = c >> 16;
+    if (c <= ex)
+        return 1;
     if ((uint16_t)c > r_fr)
         ch++;
     d = r_um - ch;
     cq = shr9(c + 511); /* <= 2^15 */
+    eq = shr9(ex);
     /* 2 acc d saturates above 2^32 - 1 > any 4 ceil(c / 512)^2 */
-    return mul_sat(2 * acc, d) >= 4 * (nnik_mul16((uint16_t)cq, (uint16_t)cq) - nnik_mul16((uint16_t)eq, (uint16_t)eq));
+    return mul_sat(2 * b->acc, d) >= 4 * (nnik_mul16((uint16_t)cq, (uint16_t)cq) - nnik_mul16((uint16_t)eq, (uint16_t)eq));
 }
 
 /* may the sample go at c?  Each block end it reaches it passes at most at that block's exit
  * (never a stop's), and the block it ends in can still brake to its exit. */
 static uint8_t can_go(nnik_plan_t *pl, uint32_t c)
 {
-    const nnik_pl_block_t *b = &pl->q[pl->head];
-    uint32_t r_um = pl->r_um, c2 = 0, ex;
+    nnik_pl_block_t *b = &pl->q[pl->head];
+    uint32_t r_um = pl->r_um;
     uint16_t r_fr = pl->r_fr;
     uint8_t k = 0;
     while (reaches(c, r_um, r_fr)) {
         uint32_t rem;
-        if (!c2) { /* ceil(c^2 / 2^16) (c < 2^24): c > a block's exit speed exactly when this > its e2 */
-            c2 = mul32(c, c, &rem);
-            c2 = (c2 << 16) + (rem >> 16) + ((uint16_t)rem != 0);
-        }
-        if (c2 > b->e2)
+        if (c > ve(b))
             return 0;
         b = &pl->q[IDX(pl, ++k)]; /* exit > 0: b is not the last block */
         rem = (r_um << 16) + r_fr + b->lfr; /* rem <= c < 2^24 */
         r_fr = (uint16_t)rem;
         r_um = b->len + (rem >> 16);
     }
-    if (!k) {
-        ex = head_exit(pl);
-        if (c <= ex)
-            return 1;
-        ex = shr9(ex);
-    } else {
-        if (c2 <= b->e2)
-            return 1;
-        ex = nnik_isqrt32(b->e2 >> 2); /* floor(exit / 512) = floor(sqrt(floor(e2 2^16 / 2^18))) */
-    }
-    return can_brake(c, r_um, r_fr, b->acc, ex);
+    return can_brake(c, r_um, r_fr, b);
 }
 
 /* floor(u * s / 2^30), |u| <= 2^30, s < 2^29, by 16-bit products (no 64-bit arithmetic) */
@@ -342,7 +315,7 @@ void nnik_pl_sample(nnik_plan_t *pl, nnik_pl_sample_t *out)
         c = v < b->vn ? v : b->vn; /* hold (not at rest: the sample must move) */
         if (!c || !can_go(pl, c)) {
             c = v > b->acc ? v - b->acc : 0;
-            fl = head_exit(pl);
+            fl = ve(b);
             if (c < fl && fl < v && can_go(pl, fl))
                 c = fl; /* down to the exit if it may go at it */
             fl = b->acc >> 2;
@@ -365,7 +338,6 @@ void nnik_pl_sample(nnik_plan_t *pl, nnik_pl_sample_t *out)
             pl->start[1] = b->end[1];
             pl->head = (uint8_t)(pl->head + 1 == NNIK_PL_N ? 0 : pl->head + 1);
             pl->count--;
-            pl->hstale = 1;
             if (!b->e2 || !pl->count) { /* a stop: exactly on the end, at rest */
                 stop = 1;
                 c = 0;

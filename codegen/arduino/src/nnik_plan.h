@@ -67,6 +67,7 @@ extern "C" {
 #endif
 #define NNIK_PL_DOT_MARGIN 8 /* Q30: the unit vectors' dot product less this is at most the exact cosine */
 #define NNIK_PL_REVERSAL 1073 /* Q30: a dot product within this of -1 is a reversal (grbl: 0.999999) */
+#define NNIK_PL_STALE 0xFFFFFFFFUL /* an exit speed not computed yet from its square */
 
 typedef struct {
     int32_t end[2];  /* um */
@@ -77,7 +78,7 @@ typedef struct {
     uint32_t acc;    /* Q16 um/sample^2 */
     uint32_t j2;     /* the junction with the next block: its speed limit squared, Q16 (0: none yet) */
     uint32_t e2;     /* planned exit speed squared, Q16 (um^2 / sample^2 * 65536): the speed is floor(sqrt(e2 2^16)) */
-    uint32_t t2;     /* 2 acc L, Q16, at most 2^32 - 1: what the block adds to the square of a speed */
+    uint32_t exit;   /* planned exit speed, floor(sqrt(e2 2^16)) (NNIK_PL_STALE: not computed yet) */
     uint16_t tool;   /* the tool word of the block (duty | 0x100 for M4) */
 } nnik_pl_block_t;
 
@@ -91,8 +92,6 @@ typedef struct {
     uint32_t v;       /* speed, Q16 um/sample */
     int32_t feed;     /* the feed whose vn is cached below */
     uint32_t feed_vn;
-    uint32_t hexit;   /* the head block's exit speed, from its e2 (hstale: to compute again) */
-    uint8_t hstale;
 } nnik_plan_t;
 
 /* One sample: the point, the speed used for it, the nominal speed and tool of its block. */

@@ -78,11 +78,11 @@ def junction(a: Block, b: Block, cfg: MachineConfig) -> int:
         return lim  # straight on
     sn = isqrt((Q30 + dot) << 1)  # sin(theta / 2), Q16
     w = [abs(b.u[i] - a.u[i]) for i in range(2)]
-    hi, lo = [c + 4 for c in w], [max(c - 4, 0) for c in w]
-    k = 0
-    while max(hi) >= 0x8000:  # to 15 bits, halving: hi rounded up, lo down
-        hi, lo, k = [(c + 1) >> 1 for c in hi], [c >> 1 for c in lo], k + 1
-    w2, wl = hi[0] ** 2 + hi[1] ** 2, isqrt(lo[0] ** 2 + lo[1] ** 2)
+    hi, k = [c + 4 for c in w], 0
+    while max(hi) >= 0x8000:  # to 15 bits, halving, rounded up
+        hi, k = [(c + 1) >> 1 for c in hi], k + 1
+    w2 = hi[0] ** 2 + hi[1] ** 2
+    wl = max(isqrt(w2) - 13, 0)  # each hi_i <= the exact |w_i| 2^-k + 9
     aj = min(min(_acc_axis(acc, wl, c) for acc, c in zip(cfg.acc_q16, hi)), 0x7FFFFF)
     r = (sn * (0x10000 + sn) << 14) // w2  # 4 sin (1 + sin) / |w|^2, Q16: this 2^(32 - 2k)
     r = min(r << (32 - 2 * k), R_MAX) if k < 16 else r >> (2 * k - 32)
