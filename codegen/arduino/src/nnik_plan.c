@@ -40,8 +40,9 @@ static uint32_t acc_axis(uint32_t a, uint32_t L, uint32_t n)
 void nnik_pl_init(nnik_plan_t *pl, const int32_t p[2])
 {
     pl->head = pl->count = 0;
-    pl->start[0] = pl->last[0] = p[0];
-    pl->start[1] = pl->last[1] = p[1];
+    pl->start[0] = p[0];
+    pl->start[1] = p[1];
+    pl->hdbig = 0;
     pl->r_um = 0;
     pl->r_fr = 0;
     pl->v = 0;
@@ -79,7 +80,7 @@ static uint32_t junction(const nnik_pl_block_t *a, const nnik_pl_block_t *b)
 {
     int32_t dot = (int32_t)((((int64_t)a->u[0] * b->u[0] + (int64_t)a->u[1] * b->u[1]) >> 30) - NNIK_PL_DOT_MARGIN);
     uint32_t lim = a->vn < b->vn ? a->vn : b->vn, sn, r, hi[2], wl, w2, aj;
-    uint8_t i, k = 0, e;
+    uint8_t k = 0, e;
     if (dot <= -Q30 + NNIK_PL_REVERSAL)
         return 0; /* a reversal: stop */
     lim = mul_sh16_sat(lim, lim);
@@ -99,14 +100,14 @@ static uint32_t junction(const nnik_pl_block_t *a, const nnik_pl_block_t *b)
     /* the junction's acceleration: the axis limit along w, min_i a_i |w| / |w_i|, on the axis
      * that binds (a_x hi_y < a_y hi_x: x) */
 #if NNIK_GC_ACC_X == NNIK_GC_ACC_Y
-    i = hi[0] < hi[1];
+    aj = acc_axis(NNIK_GC_ACC_X, wl, hi[0] > hi[1] ? hi[0] : hi[1]);
 #else
     {
         uint32_t xl, yl, xh = mul32(NNIK_GC_ACC_X, hi[1], &xl), yh = mul32(NNIK_GC_ACC_Y, hi[0], &yl);
-        i = xh > yh || (xh == yh && xl > yl);
+        uint8_t i = xh > yh || (xh == yh && xl > yl);
+        aj = acc_axis(i ? NNIK_GC_ACC_Y : NNIK_GC_ACC_X, wl, hi[i]);
     }
 #endif
-    aj = acc_axis(i ? NNIK_GC_ACC_Y : NNIK_GC_ACC_X, wl, hi[i]);
     if (aj > 0x7FFFFFUL)
         aj = 0x7FFFFFUL;
     /* r = sin / (1 - sin) = 4 sin (1 + sin) / |w|^2, Q16: floor(S 2^14 / w2) 2^(32 - 2k), S = sin (1 + sin)
@@ -115,7 +116,7 @@ static uint32_t junction(const nnik_pl_block_t *a, const nnik_pl_block_t *b)
         uint32_t sl = (sn << 16) + nnik_mul16((uint16_t)sn, (uint16_t)sn);
         uint8_t sh = sl < (sn << 16);
         r = ((uint32_t)sh << 14) | (sl >> 18); /* S 2^14 = r 2^32 + (sl << 14) */
-        r = r >= w2 ? 0xFFFFFFFFUL : nnik_div64_32(r, sl << 14, w2);
+        r = nnik_div64_32(r, sl << 14, w2); /* r < 2^15 < w2: past the straight-on test |w| > 2^20 (Q30), k >= 6 */
         if (k < 16) {
             e = (uint8_t)(32 - 2 * k);
             r = r > (0x7FFFFFFFUL >> e) ? 0x7FFFFFFFUL : r << e;
@@ -124,6 +125,16 @@ static uint32_t junction(const nnik_pl_block_t *a, const nnik_pl_block_t *b)
     }
     r = mul_sh16_sat(mul_sat(aj, NNIK_GC_JDEV_UM), r);
     return r < lim ? r : lim;
+}
+
+/* floor((2^32 - 1) / (2 acc)): the brake test's product 2 acc d fits 32 bits for d up to it (acc < 2^23:
+ * a 32-bit division) */
+#ifdef __GNUC__
+__attribute__((noinline))
+#endif
+static uint32_t dbig_of(const nnik_pl_block_t *b)
+{
+    return 0xFFFFFFFFUL / (2 * b->acc);
 }
 
 /* squared exit speeds from the last block back (no square root); stops where one does not change */
@@ -148,13 +159,14 @@ static void backward(nnik_plan_t *pl)
         if (ex2 == b->e2)
             return;
         b->e2 = ex2;
-        b->exit = ex2 ? NNIK_PL_STALE : 0; /* its square root: when the sampler first asks */
+        b->exit = NNIK_PL_STALE; /* its square root: when the sampler first asks */
     }
 }
 
 void nnik_pl_push(nnik_plan_t *pl, int32_t x, int32_t y, int32_t feed, uint16_t tool)
 {
-    int32_t dx = x - pl->last[0], dy = y - pl->last[1];
+    const int32_t *last = pl->count ? pl->q[IDX(pl, pl->count - 1)].end : pl->start; /* where the last block ends */
+    int32_t dx = x - last[0], dy = y - last[1];
     uint32_t ax = uabs32(dx), ay = uabs32(dy), Lq, Lc;
     uint32_t m;
     uint8_t f = 0;
@@ -208,7 +220,7 @@ void nnik_pl_push(nnik_plan_t *pl, int32_t x, int32_t y, int32_t feed, uint16_t 
     b->vn = pl->feed_vn;
     /* the smallest of a_i Lq / |d_i| (the moving axes): on the axis that binds, a_x |d_y| <= a_y |d_x|: x */
 #if NNIK_GC_ACC_X == NNIK_GC_ACC_Y
-    b->acc = ax >= ay ? acc_axis(NNIK_GC_ACC_X, Lq, ax) : acc_axis(NNIK_GC_ACC_Y, Lq, ay);
+    b->acc = acc_axis(NNIK_GC_ACC_X, Lq, ax >= ay ? ax : ay);
 #else
     {
         uint32_t xl, yl, xh = mul32(NNIK_GC_ACC_X, ay, &xl), yh = mul32(NNIK_GC_ACC_Y, ax, &yl);
@@ -224,10 +236,9 @@ void nnik_pl_push(nnik_plan_t *pl, int32_t x, int32_t y, int32_t feed, uint16_t 
     else { /* the head, from rest at its start */
         pl->r_um = b->len;
         pl->r_fr = b->lfr;
+        pl->hdbig = dbig_of(b);
     }
     pl->count++;
-    pl->last[0] = x;
-    pl->last[1] = y;
     backward(pl);
 }
 
@@ -256,7 +267,7 @@ static uint32_t ve(nnik_pl_block_t *b)
 
 /* after moving c this sample (rem > c left), can the block still brake to its exit speed?
  * d = floor((rem - c) / 65536) by 32-bit pieces. */
-static uint8_t can_brake(uint32_t c, uint32_t r_um, uint16_t r_fr, nnik_pl_block_t *b)
+static uint8_t can_brake(uint32_t c, uint32_t r_um, uint16_t r_fr, nnik_pl_block_t *b, uint32_t dbig)
 {
     uint32_t d, cq, eq, ex = ve(b), ch = c >> 16;
     if (c <= ex)
@@ -264,10 +275,11 @@ static uint8_t can_brake(uint32_t c, uint32_t r_um, uint16_t r_fr, nnik_pl_block
     if ((uint16_t)c > r_fr)
         ch++;
     d = r_um - ch;
+    if (d > dbig) /* 2 acc d > 2^32 - 1 > any 4 ceil(c / 512)^2 */
+        return 1;
     cq = shr9(c + 511); /* <= 2^15 */
     eq = shr9(ex);
-    /* 2 acc d saturates above 2^32 - 1 > any 4 ceil(c / 512)^2 */
-    return mul_sat(2 * b->acc, d) >= 4 * (nnik_mul16((uint16_t)cq, (uint16_t)cq) - nnik_mul16((uint16_t)eq, (uint16_t)eq));
+    return 2 * b->acc * d >= 4 * (nnik_mul16((uint16_t)cq, (uint16_t)cq) - nnik_mul16((uint16_t)eq, (uint16_t)eq));
 }
 
 /* may the sample go at c?  Each block end it reaches it passes at most at that block's exit
@@ -287,7 +299,7 @@ static uint8_t can_go(nnik_plan_t *pl, uint32_t c)
         r_fr = (uint16_t)rem;
         r_um = b->len + (rem >> 16);
     }
-    return can_brake(c, r_um, r_fr, b);
+    return can_brake(c, r_um, r_fr, b, k ? dbig_of(b) : pl->hdbig);
 }
 
 /* floor(u * s / 2^30), |u| <= 2^30, s < 2^29, by 16-bit products (no 64-bit arithmetic) */
@@ -338,6 +350,8 @@ void nnik_pl_sample(nnik_plan_t *pl, nnik_pl_sample_t *out)
             pl->start[1] = b->end[1];
             pl->head = (uint8_t)(pl->head + 1 == NNIK_PL_N ? 0 : pl->head + 1);
             pl->count--;
+            if (pl->count) /* the new head's */
+                pl->hdbig = dbig_of(&pl->q[pl->head]);
             if (!b->e2 || !pl->count) { /* a stop: exactly on the end, at rest */
                 stop = 1;
                 c = 0;

@@ -86,7 +86,7 @@ typedef struct {
     nnik_pl_block_t q[NNIK_PL_N];
     uint8_t head, count;
     int32_t start[2]; /* where the head block starts */
-    int32_t last[2];  /* where the last block queued ends */
+    uint32_t hdbig;   /* the head block's floor((2^32 - 1) / (2 acc)): the brake test's product fits 32 bits below it */
     uint32_t r_um;    /* distance left in the head block: r_um + r_fr / 65536 um (s = L - that) */
     uint16_t r_fr;
     uint32_t v;       /* speed, Q16 um/sample */
