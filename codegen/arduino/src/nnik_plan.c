@@ -40,9 +40,8 @@ static uint32_t acc_axis(uint32_t a, uint32_t L, uint32_t n)
 void nnik_pl_init(nnik_plan_t *pl, const int32_t p[2])
 {
     pl->head = pl->count = 0;
-    pl->start[0] = p[0];
-    pl->start[1] = p[1];
-    pl->hdbig = 0;
+    pl->start[0] = pl->last[0] = p[0];
+    pl->start[1] = pl->last[1] = p[1];
     pl->r_um = 0;
     pl->r_fr = 0;
     pl->v = 0;
@@ -69,23 +68,17 @@ static uint32_t mul_sh16_sat(uint32_t a, uint32_t b)
     return hi >> 16 ? 0xFFFFFFFFUL : (hi << 16) | (lo >> 16);
 }
 
-static uint32_t add_sat(uint32_t a, uint32_t b)
-{
-    a += b;
-    return a < b ? 0xFFFFFFFFUL : a;
-}
-
-/* the square of the junction's speed limit between blocks a and b (b follows a), Q16: see nnik_plan.h */
-static uint32_t junction(const nnik_pl_block_t *a, const nnik_pl_block_t *b)
+/* the square of the junction's speed limit between blocks a and b (b follows a), Q16, before the
+ * feeds' cap (2^32 - 1: straight on); see nnik_plan.h */
+static uint32_t junction2(const nnik_pl_block_t *a, const nnik_pl_block_t *b)
 {
     int32_t dot = (int32_t)((((int64_t)a->u[0] * b->u[0] + (int64_t)a->u[1] * b->u[1]) >> 30) - NNIK_PL_DOT_MARGIN);
-    uint32_t lim = a->vn < b->vn ? a->vn : b->vn, sn, r, hi[2], wl, w2, aj;
+    uint32_t sn, r, hi[2], wl, w2, aj;
     uint8_t k = 0, e;
     if (dot <= -Q30 + NNIK_PL_REVERSAL)
         return 0; /* a reversal: stop */
-    lim = mul_sh16_sat(lim, lim);
     if (dot >= Q30 - NNIK_PL_REVERSAL)
-        return lim; /* straight on */
+        return 0xFFFFFFFFUL; /* straight on: the feeds' */
     sn = nnik_isqrt32((uint32_t)(Q30 + dot) << 1); /* sin(theta / 2), Q16 */
     hi[0] = uabs32(b->u[0] - a->u[0]) + 4; /* |w_i| + 4 >= the exact w = u2 - u1's (|u| <= 2^30: no overflow) */
     hi[1] = uabs32(b->u[1] - a->u[1]) + 4;
@@ -123,51 +116,47 @@ static uint32_t junction(const nnik_pl_block_t *a, const nnik_pl_block_t *b)
         } else
             r >>= 2 * k - 32;
     }
-    r = mul_sh16_sat(mul_sat(aj, NNIK_GC_JDEV_UM), r);
-    return r < lim ? r : lim;
+    return mul_sh16_sat(mul_sat(aj, NNIK_GC_JDEV_UM), r);
 }
 
-/* floor((2^32 - 1) / (2 acc)): the brake test's product 2 acc d fits 32 bits for d up to it (acc < 2^23:
- * a 32-bit division) */
-#ifdef __GNUC__
-__attribute__((noinline))
-#endif
-static uint32_t dbig_of(const nnik_pl_block_t *b)
+/* the junction's speed limit between blocks a and b (b follows a): floor(sqrt(j2 2^16)) of its
+ * square j2 (Q16), see nnik_plan.h */
+static uint32_t junction(const nnik_pl_block_t *a, const nnik_pl_block_t *b)
 {
-    return 0xFFFFFFFFUL / (2 * b->acc);
+    uint32_t lim = a->vn < b->vn ? a->vn : b->vn, j2 = junction2(a, b);
+    if (j2 == 0xFFFFFFFFUL)
+        return lim;
+    j2 = nnik_isqrt_hl(j2 >> 16, j2 << 16);
+    return j2 < lim ? j2 : lim;
 }
 
-/* squared exit speeds from the last block back (no square root); stops where one does not change */
+/* exit speeds from the last block back; stops where an exit does not change */
 static void backward(nnik_plan_t *pl)
 {
     int8_t k;
-    nnik_pl_block_t *b = &pl->q[IDX(pl, pl->count - 1)];
-    b->e2 = 0;
-    b->exit = 0;
+    pl->q[IDX(pl, pl->count - 1)].exit = 0;
     for (k = (int8_t)pl->count - 2; k >= 0; k--) {
-        const nnik_pl_block_t *n = b;
-        uint32_t ex2, g;
-        b = &pl->q[IDX(pl, k)];
-        /* t = acc L (Q16): acc len + floor(acc lfr / 2^16); exit^2 <= next exit^2 + 2 t */
-        ex2 = add_sat(mul_sat(n->acc, n->len), mul_sh16_sat(n->acc, n->lfr));
-        ex2 = add_sat(n->e2, add_sat(ex2, ex2));
-        if (ex2 > b->j2)
-            ex2 = b->j2;
-        g = ((b->acc >> 2) + 255) >> 8; /* an exit below acc >> 2 (the sampler's floor): a stop */
-        if (ex2 < nnik_mul16((uint16_t)g, (uint16_t)g))
-            ex2 = 0;
-        if (ex2 == b->e2)
+        nnik_pl_block_t *b = &pl->q[IDX(pl, k)];
+        const nnik_pl_block_t *n = &pl->q[IDX(pl, k + 1)];
+        uint64_t t = (uint64_t)n->acc * n->len + (((uint64_t)n->acc * n->lfr) >> 16), e2;
+        uint32_t ex = b->jmax;
+        if (t < (1ULL << 40)) {
+            e2 = (uint64_t)n->exit * n->exit + (t << 17);
+            if ((uint64_t)ex * ex > e2)
+                ex = nnik_isqrt64(e2);
+        }
+        if (ex < (b->acc >> 2))
+            ex = 0; /* below the sampler's floor: a stop */
+        if (ex == b->exit)
             return;
-        b->e2 = ex2;
-        b->exit = NNIK_PL_STALE; /* its square root: when the sampler first asks */
+        b->exit = ex;
     }
 }
 
 void nnik_pl_push(nnik_plan_t *pl, int32_t x, int32_t y, int32_t feed, uint16_t tool)
 {
-    const int32_t *last = pl->count ? pl->q[IDX(pl, pl->count - 1)].end : pl->start; /* where the last block ends */
-    int32_t dx = x - last[0], dy = y - last[1];
-    uint32_t ax = uabs32(dx), ay = uabs32(dy), Lq, Lc;
+    int32_t dx = x - pl->last[0], dy = y - pl->last[1];
+    uint32_t ax = uabs32(dx), ay = uabs32(dy), Lq, Lc, acc;
     uint32_t m;
     uint8_t f = 0;
     nnik_pl_block_t *b;
@@ -218,27 +207,28 @@ void nnik_pl_push(nnik_plan_t *pl, int32_t x, int32_t y, int32_t feed, uint16_t 
         pl->feed_vn = (uint32_t)(((uint64_t)(uint32_t)feed << 16) / (60UL * NNIK_GC_SAMPLE_HZ));
     }
     b->vn = pl->feed_vn;
-    /* the smallest of a_i Lq / |d_i| (the moving axes): on the axis that binds, a_x |d_y| <= a_y |d_x|: x */
 #if NNIK_GC_ACC_X == NNIK_GC_ACC_Y
-    b->acc = acc_axis(NNIK_GC_ACC_X, Lq, ax >= ay ? ax : ay);
+    acc = acc_axis(NNIK_GC_ACC_X, Lq, ax >= ay ? ax : ay);
 #else
     {
         uint32_t xl, yl, xh = mul32(NNIK_GC_ACC_X, ay, &xl), yh = mul32(NNIK_GC_ACC_Y, ax, &yl);
-        b->acc = (xh < yh || (xh == yh && xl <= yl)) ? acc_axis(NNIK_GC_ACC_X, Lq, ax) : acc_axis(NNIK_GC_ACC_Y, Lq, ay);
+        acc = (xh < yh || (xh == yh && xl <= yl)) ? acc_axis(NNIK_GC_ACC_X, Lq, ax) : acc_axis(NNIK_GC_ACC_Y, Lq, ay);
     }
 #endif
+    b->acc = acc;
+    b->dbig = 0xFFFFFFFFUL / (2 * acc); /* acc <= a_axis * sqrt(2) < 2^23: 32-bit division */
     b->tool = tool;
-    b->j2 = 0;
-    b->e2 = 0;
+    b->jmax = 0;
     b->exit = 0;
     if (pl->count)
-        pl->q[IDX(pl, pl->count - 1)].j2 = junction(&pl->q[IDX(pl, pl->count - 1)], b);
+        pl->q[IDX(pl, pl->count - 1)].jmax = junction(&pl->q[IDX(pl, pl->count - 1)], b);
     else { /* the head, from rest at its start */
         pl->r_um = b->len;
         pl->r_fr = b->lfr;
-        pl->hdbig = dbig_of(b);
     }
     pl->count++;
+    pl->last[0] = x;
+    pl->last[1] = y;
     backward(pl);
 }
 
@@ -257,56 +247,52 @@ static uint16_t shr9(uint32_t t)
     return (uint16_t)(((uint16_t)(t >> 16) << 7) | ((uint16_t)t >> 9));
 }
 
-/* the block's exit speed floor(sqrt(e2 2^16)), computed when first asked for after a change */
-static uint32_t ve(nnik_pl_block_t *b)
-{
-    if (b->exit == NNIK_PL_STALE)
-        b->exit = nnik_isqrt_hl(b->e2 >> 16, b->e2 << 16);
-    return b->exit;
-}
-
 /* after moving c this sample (rem > c left), can the block still brake to its exit speed?
  * d = floor((rem - c) / 65536) by 32-bit pieces. */
-static uint8_t can_brake(uint32_t c, uint32_t r_um, uint16_t r_fr, nnik_pl_block_t *b, uint32_t dbig)
+static uint8_t can_brake(uint32_t c, uint32_t r_um, uint16_t r_fr, const nnik_pl_block_t *b)
 {
-    uint32_t d, cq, eq, ex = ve(b), ch = c >> 16;
-    if (c <= ex)
+    uint32_t d, cq, eq, ch = c >> 16;
+    if (c <= b->exit)
         return 1;
     if ((uint16_t)c > r_fr)
         ch++;
     d = r_um - ch;
-    if (d > dbig) /* 2 acc d > 2^32 - 1 > any 4 ceil(c / 512)^2 */
+    if (d > b->dbig) /* 2 acc d > 2^32 - 1 > any 4 ceil(c / 512)^2 */
         return 1;
     cq = shr9(c + 511); /* <= 2^15 */
-    eq = shr9(ex);
+    eq = shr9(b->exit);
     return 2 * b->acc * d >= 4 * (nnik_mul16((uint16_t)cq, (uint16_t)cq) - nnik_mul16((uint16_t)eq, (uint16_t)eq));
 }
 
 /* may the sample go at c?  Each block end it reaches it passes at most at that block's exit
  * (never a stop's), and the block it ends in can still brake to its exit. */
-static uint8_t can_go(nnik_plan_t *pl, uint32_t c)
+static uint8_t can_go(const nnik_plan_t *pl, uint32_t c)
 {
-    nnik_pl_block_t *b = &pl->q[pl->head];
+    const nnik_pl_block_t *b = &pl->q[pl->head];
     uint32_t r_um = pl->r_um;
     uint16_t r_fr = pl->r_fr;
     uint8_t k = 0;
     while (reaches(c, r_um, r_fr)) {
         uint32_t rem;
-        if (c > ve(b))
+        if (c > b->exit)
             return 0;
         b = &pl->q[IDX(pl, ++k)]; /* exit > 0: b is not the last block */
         rem = (r_um << 16) + r_fr + b->lfr; /* rem <= c < 2^24 */
         r_fr = (uint16_t)rem;
         r_um = b->len + (rem >> 16);
     }
-    return can_brake(c, r_um, r_fr, b, k ? dbig_of(b) : pl->hdbig);
+    return can_brake(c, r_um, r_fr, b);
 }
 
 /* floor(u * s / 2^30), |u| <= 2^30, s < 2^29, by 16-bit products (no 64-bit arithmetic) */
 static int32_t mul_q30(int32_t u, uint32_t s)
 {
-    uint32_t plo, q = mul32(uabs32(u), s, &plo); /* |u| s = q 2^32 + plo */
-    q = (q << 2) | ((uint8_t)(plo >> 24) >> 6); /* plo >> 30 by its top byte: no 30-step shift loop */
+    uint32_t a = u < 0 ? (uint32_t)0 - (uint32_t)u : (uint32_t)u;
+    uint16_t ah = (uint16_t)(a >> 16), al = (uint16_t)a, sh = (uint16_t)(s >> 16), sl = (uint16_t)s;
+    uint32_t lo = nnik_mul16(al, sl), mid = nnik_mul16(ah, sl) + nnik_mul16(al, sh), hi = nnik_mul16(ah, sh);
+    uint32_t plo = lo + (mid << 16), q;
+    hi += (mid >> 16) + (plo < lo);
+    q = (hi << 2) | ((uint8_t)(plo >> 24) >> 6); /* plo >> 30 by its top byte: no 30-step shift loop */
     if (u >= 0)
         return (int32_t)q;
     return -(int32_t)(q + ((plo & 0x3FFFFFFFUL) != 0));
@@ -326,13 +312,12 @@ void nnik_pl_sample(nnik_plan_t *pl, nnik_pl_sample_t *out)
     if (!can_go(pl, c)) {
         c = v < b->vn ? v : b->vn; /* hold (not at rest: the sample must move) */
         if (!c || !can_go(pl, c)) {
-            c = v > b->acc ? v - b->acc : 0;
-            fl = ve(b);
-            if (c < fl && fl < v && can_go(pl, fl))
-                c = fl; /* down to the exit if it may go at it */
             fl = b->acc >> 2;
             if (fl < 1)
                 fl = 1;
+            c = v > b->acc ? v - b->acc : 0;
+            if (c < b->exit && b->exit < v && can_go(pl, b->exit))
+                c = b->exit; /* down to the exit if it may go at it */
             if (c < fl)
                 c = fl;
         }
@@ -350,9 +335,7 @@ void nnik_pl_sample(nnik_plan_t *pl, nnik_pl_sample_t *out)
             pl->start[1] = b->end[1];
             pl->head = (uint8_t)(pl->head + 1 == NNIK_PL_N ? 0 : pl->head + 1);
             pl->count--;
-            if (pl->count) /* the new head's */
-                pl->hdbig = dbig_of(&pl->q[pl->head]);
-            if (!b->e2 || !pl->count) { /* a stop: exactly on the end, at rest */
+            if (!b->exit || !pl->count) { /* a stop: exactly on the end, at rest */
                 stop = 1;
                 c = 0;
                 pl->r_um = pl->q[pl->head].len; /* the next block (if any) starts from its start */

@@ -17,25 +17,19 @@
  * block acceleration, rounded down).
  *
  * Lookahead.  The queue holds NNIK_PL_N blocks.  When a block arrives, the junction with the
- * block before it gets its squared speed limit j2 (Q16: um^2 / sample^2 * 65536; grbl 1.1's
- * junction deviation, every rounding downward):
- *     dot = floor((u1x u2x + u1y u2y) / 2^30) - NNIK_PL_DOT_MARGIN (at most the exact cosine: each u
+ * block before it gets its speed limit (grbl 1.1's junction deviation, every rounding downward):
+ *     dot = ((u1x u2x + u1y u2y) >> 30) - NNIK_PL_DOT_MARGIN (at most the exact cosine: each u
  *     component is within 2 of the exact one); dot <= -2^30 + NNIK_PL_REVERSAL (grbl's cosine
- *     0.999999): a reversal, 0; dot >= 2^30 - NNIK_PL_REVERSAL: straight on, lim = floor(min(vn1, vn2)^2 / 2^16);
- *     else sin(theta/2) = sn = isqrt((2^30 + dot) << 1) (Q16) and, with w = u2 - u1 per axis,
- *     hi_i = |w_i| + 4 halved (rounded up) k times to 15 bits (hi_i >= the exact |w_i| 2^-k),
- *     w2 = hi_x^2 + hi_y^2, wl = isqrt(w2) - 13 (at most the exact |w| 2^-k, 0 if below):
- *     grbl's r = sin / (1 - sin) = 4 sin (1 + sin) / |w|^2 as r = floor(S 2^14 / w2) 2^(32 - 2k)
- *     (at most 2^31 - 1; shifted down when k > 16), S = sn (2^16 + sn);
- *     the junction's acceleration (grbl: the axis limit along w) aj = min(min_i floor(a_i wl / hi_i), 2^23 - 1);
- *     j2 = min(floor(min(aj JDEV_UM, 2^32 - 1) r / 2^16), lim),
- * and a backward pass sets every squared exit speed e2 (no square root): the last block's is 0,
- * and going back
- *     e2_i = min(j2_i, e2_{i+1} + 2 t_{i+1}, 2^32 - 1), t = acc len + floor(acc lfr / 2^16) (acc L, Q16);
- * an e2 below ceil((acc >> 2) / 256)^2 (the sampler's floor acc >> 2, squared) becomes 0, a stop;
- * the pass stops where an e2 does not change.  The exit speed is floor(sqrt(e2 2^16)), taken when
- * the sampler first needs it.  There is no forward pass: the sampler below never changes speed by
- * more than acc per sample.
+ *     0.999999): a reversal, 0; dot >= 2^30 - NNIK_PL_REVERSAL: straight on, min(vn1, vn2);
+ *     sin(theta/2) = isqrt((2^30 + dot) << 29) (Q30), r = min(floor(sin * 2^16 / (2^30 - sin)), 2^31 - 1);
+ *     the junction's acceleration (grbl: the axis limit along w = u2 - u1) from w less its error:
+ *     |w| = isqrt(sum max(|w_i| - 4, 0)^2), aj = min(min_i floor(a_i |w| / (|w_i| + 4)), 2^23 - 1);
+ *     vj^2 = aj * JDEV_UM * r (Q32), jmax = min(vn1, vn2, isqrt(vj^2)),
+ * and a backward pass sets every exit speed: the last block's exit is 0, and going back
+ *     exit_i = min(jmax_i, isqrt(exit_{i+1}^2 + (t << 17))), t = acc_{i+1} len_{i+1} + (acc_{i+1} lfr_{i+1} >> 16)
+ * (jmax_i itself when t >= 2^40 or jmax^2 <= the sum); an exit below acc_i >> 2 (the sampler's
+ * floor) becomes 0, a stop; the pass stops where an exit does not change.  There is no forward
+ * pass: the sampler below never changes speed by more than acc per sample.
  *
  * Determinism.  The sampler runs only on blocks whose exit speed is final: while the queue is
  * full (it runs until the head block has been left behind, then the parser adds the next block)
@@ -52,7 +46,7 @@
  * 0), and the block it ends in can still brake: c <= ve, or
  *     2 acc d >= 4 (ceil(c / 512)^2 - floor(ve / 512)^2), d = (rem - c) >> 16
  * (speeds below 2^24, 256 um per sample, so every product fits 32 bits; d in whole um; when
- * d > floor((2^32 - 1) / (2 acc)), kept for the head block, it passes without the product).  Then s += c; at
+ * d > floor((2^32 - 1) / (2 acc)), kept per block, it passes without the product).  Then s += c; at
  * or past the end of a block with exit 0 the sample lands exactly on its end and v = 0 (a stop);
  * past the end of any other block the remainder carries into the next.  The point is
  * start + ((u * floor(s / 65536)) >> 30) per axis (arithmetic shift: floor), or the end point.
@@ -73,7 +67,6 @@ extern "C" {
 #endif
 #define NNIK_PL_DOT_MARGIN 8 /* Q30: the unit vectors' dot product less this is at most the exact cosine */
 #define NNIK_PL_REVERSAL 1073 /* Q30: a dot product within this of -1 is a reversal (grbl: 0.999999) */
-#define NNIK_PL_STALE 0xFFFFFFFFUL /* an exit speed not computed yet from its square */
 
 typedef struct {
     int32_t end[2];  /* um */
@@ -82,9 +75,9 @@ typedef struct {
     uint16_t lfr;    /* the length's fraction, Q16 (length = len + lfr / 65536 um, floor) */
     uint32_t vn;     /* nominal speed, Q16 um/sample */
     uint32_t acc;    /* Q16 um/sample^2 */
-    uint32_t j2;     /* the junction with the next block: its speed limit squared, Q16 (0: none yet) */
-    uint32_t e2;     /* planned exit speed squared, Q16 (um^2 / sample^2 * 65536): the speed is floor(sqrt(e2 2^16)) */
-    uint32_t exit;   /* planned exit speed, floor(sqrt(e2 2^16)) (NNIK_PL_STALE: not computed yet) */
+    uint32_t dbig;   /* floor((2^32 - 1) / (2 acc)): the brake test's product fits 32 bits below it */
+    uint32_t jmax;   /* speed limit at the junction with the next block (0: none yet) */
+    uint32_t exit;   /* planned exit speed */
     uint16_t tool;   /* the tool word of the block (duty | 0x100 for M4) */
 } nnik_pl_block_t;
 
@@ -92,7 +85,7 @@ typedef struct {
     nnik_pl_block_t q[NNIK_PL_N];
     uint8_t head, count;
     int32_t start[2]; /* where the head block starts */
-    uint32_t hdbig;   /* the head block's floor((2^32 - 1) / (2 acc)): the brake test's product fits 32 bits below it */
+    int32_t last[2];  /* where the last block queued ends */
     uint32_t r_um;    /* distance left in the head block: r_um + r_fr / 65536 um (s = L - that) */
     uint16_t r_fr;
     uint32_t v;       /* speed, Q16 um/sample */

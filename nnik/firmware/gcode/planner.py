@@ -41,9 +41,8 @@ class Block:
     tool: int
     index: int  # the push's index in the job (its move is the interpreter's)
     lfr: int = 0  # the length's fraction, Q16: the length is len + lfr / 65536 um (floor)
-    j2: int = 0  # the junction with the next block: its speed limit squared, Q16
-    e2: int = 0  # the exit speed squared, Q16
-    exit: int = 0  # floor(sqrt(e2 2^16)) (the chip computes it when the sampler first asks)
+    jmax: int = 0
+    exit: int = 0
 
     @property
     def l16(self) -> int:
@@ -68,14 +67,14 @@ def length_q(dx: int, dy: int) -> tuple[int, int, int]:
     return Lq, Lq + (Lq * Lq != m), f
 
 
-def junction(a: Block, b: Block, cfg: MachineConfig) -> int:
-    """The square of the speed limit at the junction a -> b, Q16 (nnik_plan.c junction())."""
+def junction2(a: Block, b: Block, cfg: MachineConfig) -> int:
+    """The square of the speed limit at the junction a -> b, Q16, before the feeds' cap (U32:
+    straight on; nnik_plan.c junction2())."""
     dot = ((a.u[0] * b.u[0] + a.u[1] * b.u[1]) >> 30) - DOT_MARGIN
-    lim = min(a.vn, b.vn) ** 2 >> 16
     if dot <= -Q30 + REVERSAL:
         return 0  # a reversal
     if dot >= Q30 - REVERSAL:
-        return lim  # straight on
+        return U32  # straight on: the feeds'
     sn = isqrt((Q30 + dot) << 1)  # sin(theta / 2), Q16
     w = [abs(b.u[i] - a.u[i]) for i in range(2)]
     hi, k = [c + 4 for c in w], 0
@@ -86,7 +85,13 @@ def junction(a: Block, b: Block, cfg: MachineConfig) -> int:
     aj = min(min(_acc_axis(acc, wl, c) for acc, c in zip(cfg.acc_q16, hi)), 0x7FFFFF)
     r = (sn * (0x10000 + sn) << 14) // w2  # 4 sin (1 + sin) / |w|^2, Q16: this 2^(32 - 2k)
     r = min(r << (32 - 2 * k), R_MAX) if k < 16 else r >> (2 * k - 32)
-    return min(min(aj * cfg.junction_dev_um, U32) * r >> 16, U32, lim)
+    return min(min(aj * cfg.junction_dev_um, U32) * r >> 16, U32)
+
+
+def junction(a: Block, b: Block, cfg: MachineConfig) -> int:
+    """The speed limit at the junction a -> b: floor(sqrt(j2 2^16)) of its square (nnik_plan.c junction())."""
+    j2, lim = junction2(a, b, cfg), min(a.vn, b.vn)
+    return lim if j2 == U32 else min(isqrt(j2 << 16), lim)
 
 
 class Planner:
@@ -123,23 +128,26 @@ class Planner:
         lfr = (Lq >> (f - 16) if f >= 16 else Lq << (16 - f)) & 0xFFFF
         b = Block((x, y), u, Lq >> f, vn, acc, tool, index, lfr)
         if self.q:
-            self.q[-1].j2 = junction(self.q[-1], b, self.cfg)
+            self.q[-1].jmax = junction(self.q[-1], b, self.cfg)
         self.q.append(b)
         self.last = (x, y)
         self._backward()
 
     def _backward(self) -> None:
         q = self.q
-        q[-1].e2 = q[-1].exit = 0
+        q[-1].exit = 0
         for k in range(len(q) - 2, -1, -1):
             b, n = q[k], q[k + 1]
-            t = n.acc * n.len + ((n.acc * n.lfr) >> 16)  # acc L, Q16
-            e2 = min(n.e2 + 2 * t, b.j2, U32)
-            if e2 < (((b.acc >> 2) + 255) >> 8) ** 2:
-                e2 = 0  # below the sampler's floor acc >> 2: a stop
-            if e2 == b.e2:
+            t, ex = n.acc * n.len + ((n.acc * n.lfr) >> 16), b.jmax
+            if t < 1 << 40:
+                e2 = n.exit * n.exit + (t << 17)
+                if ex * ex > e2:
+                    ex = isqrt(e2)
+            if ex < b.acc >> 2:
+                ex = 0  # below the sampler's floor: a stop
+            if ex == b.exit:
                 return
-            b.e2, b.exit = e2, isqrt(e2 << 16)
+            b.exit = ex
 
     @staticmethod
     def _can_brake(c: int, rem: int, ve: int, acc: int) -> bool:
