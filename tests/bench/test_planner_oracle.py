@@ -52,9 +52,10 @@ def test_no_junction_and_no_acceleration_above_grbls_limits(pieces, lim, feed_sh
     assert r["accel"].size == 0 or r["accel"].max() <= 1.0 + 1e-12, r["accel"].max()
 
 
-@pytest.mark.xfail(reason="measured 1.03-1.10 on random paths (1.14 on 0.01 mm chords): a sample that enters "
-                          "a block must be able to brake there from where it lands (up to one sample's travel "
-                          "in), which the float planner's continuous entry does not pay", strict=False)
+@pytest.mark.xfail(reason="measured 1.00-2.09 on 25 random paths (2.09 with 2 blocks at 500 Hz; 1.14 on 0.01 mm "
+                          "chords): a sample that enters a block must be able to brake there from where it lands "
+                          "(up to one sample's travel in), which the float planner's continuous entry does not pay",
+                   strict=False)
 @settings(max_examples=30, deadline=None, database=None, suppress_health_check=list(HealthCheck))
 @given(pieces=st.lists(piece, min_size=1, max_size=20), lim=limits)
 def test_job_time_within_2_percent_of_the_float_planner(pieces, lim):
@@ -82,3 +83,25 @@ def test_oracle_trapezoid_and_lookahead():
     ops = path_ops([("arc", 5000.0, 180.0, 20.0)], 3_000_000)
     t2, t16, tinf = (oracle.plan(ops, cfg, n).time_s for n in (2, 16, None))
     assert t2 > t16 > tinf
+
+
+# found by the random comparison (session 11): grbl's limit at one junction is 4,572 um/s and the sampler
+# passes it at 4,720 (1.032x). It brakes by acc per sample towards a block end it reaches between
+# two samples' travel, and the last step down lands above the exit speed (the same on main before
+# the junction rewrite: 1.0325x). Kept as a known case until the sampler's brake test covers it.
+KNOWN_PIECES = [("line", 4531.135419811918, -0.9479645301670132), ("arc", 16681.898360198866, -2.814929619145289, 91.6829962155551),
+                ("line", 166.01000127372694, 5.879218319281865), ("line", 72.35112999051923, -57.53196126030339),
+                ("line", 1872.8845372586707, -164.32543062522166), ("line", 186.19281826061984, 0.9002612420351959),
+                ("line", 76.4127931314066, -7.053423364997132), ("line", 2427.9085365583173, -174.42792841826616),
+                ("line", 2896.6078009483567, -174.83087730634927), ("rev", 915.9839043529554),
+                ("line", 104.43632077942563, 5.082157920263615), ("line", 316.59350358392305, -128.3157804886928),
+                ("line", 161.65937713732572, -7.269408031240876)]
+
+
+@pytest.mark.xfail(reason="the sampler passes one junction of this path at 1.032x grbl's limit (see KNOWN_PIECES)",
+                   strict=True)
+def test_a_known_path_passes_every_junction_within_grbls_limit():
+    cfg = machine({"accel_um_s2": (404000, 6203000), "junction_dev_um": 93, "max_feed_um_min": 5612000,
+                   "plan_blocks": 12, "sample_hz": 2000})
+    r = compare(path_ops(KNOWN_PIECES, 2356556), cfg)
+    assert r["junction"].max() <= 1.0 + 1e-12, r["junction"].max()

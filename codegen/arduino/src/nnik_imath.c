@@ -24,24 +24,28 @@ uint32_t nnik_isqrt32(uint32_t v)
 
 uint32_t nnik_div64_32(uint32_t hi, uint32_t lo, uint32_t d)
 {
-    uint32_t q = 0;
     uint8_t i, top;
-    for (i = 0; i < 32; i++) { /* restoring division, one bit a step; hi < d throughout */
+    for (i = 0; i < 32; i++) { /* restoring division, one bit a step; hi < d throughout; the
+                                * quotient's bits enter lo from below as the dividend leaves it */
         top = (uint8_t)((uint8_t)(hi >> 24) >> 7); /* the bit shifted out: the value is then > d */
         hi = (hi << 1) | (uint8_t)((uint8_t)(lo >> 24) >> 7);
         lo <<= 1;
-        q <<= 1;
         if (top || hi >= d) {
             hi -= d; /* mod 2^32: the true remainder, below d */
-            q |= 1;
+            lo |= 1;
         }
     }
-    return q;
+    return lo;
 }
 
 uint32_t nnik_isqrt64(uint64_t v)
 {
-    uint32_t hi = (uint32_t)(v >> 32), lo = (uint32_t)v, r, rl, tl;
+    return nnik_isqrt_hl((uint32_t)(v >> 32), (uint32_t)v);
+}
+
+uint32_t nnik_isqrt_hl(uint32_t hi, uint32_t lo)
+{
+    uint32_t r, rl, tl;
     uint8_t i, rx, tx;
     if (!hi)
         return nnik_isqrt32(lo); /* 32-bit arithmetic: far cheaper on AVR */

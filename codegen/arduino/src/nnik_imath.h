@@ -32,6 +32,8 @@ static inline uint32_t nnik_mul16(uint16_t a, uint16_t b)
 /* floor(sqrt(v)) */
 uint32_t nnik_isqrt32(uint32_t v);
 uint32_t nnik_isqrt64(uint64_t v);
+/* floor(sqrt(hi 2^32 + lo)): no 64-bit value to build (a 64-bit shift is a loop on AVR) */
+uint32_t nnik_isqrt_hl(uint32_t hi, uint32_t lo);
 
 /* floor((hi 2^32 + lo) / d) for hi < d (the quotient fits 32 bits), by 32-bit steps: far
  * cheaper on AVR than a 64-bit division */

@@ -9,24 +9,32 @@
 #error "NNIK_PL_N must be 2..64"
 #endif
 
-#define IDX(pl, k) ((uint8_t)(((pl)->head + (k)) % NNIK_PL_N))
+#define IDX(pl, k) ((uint8_t)((uint8_t)((pl)->head + (k)) % NNIK_PL_N)) /* unsigned: no 16-bit division */
 #define Q30 (1L << 30)
 
 static uint32_t uabs32(int32_t v) { return v < 0 ? (uint32_t)0 - (uint32_t)v : (uint32_t)v; }
 
-/* floor(a * L / n), n > 0 (an axis' limit on the block's acceleration) */
+/* a * b = (the result) 2^32 + *lo (libgcc's 32 x 32 -> 64 product, linked anyway: small and as
+ * fast as 16-bit pieces; one function, so each call site stays small) */
+#ifdef __GNUC__
+__attribute__((noinline))
+#endif
+static uint32_t mul32(uint32_t a, uint32_t b, uint32_t *lo)
+{
+    uint64_t p = (uint64_t)a * b;
+    *lo = (uint32_t)p;
+    return (uint32_t)(p >> 32);
+}
+
+/* floor(a * L / n), n > 0, at most 2^32 - 1 (an axis' limit on the block's acceleration) */
 #ifdef __GNUC__
 __attribute__((noinline))
 #endif
 static uint32_t acc_axis(uint32_t a, uint32_t L, uint32_t n)
 {
-    if (L < 0x400UL && a < 0x400000UL) /* a * L < 2^32 */
-        return a * L / n;
-    {
-        uint64_t p = (uint64_t)a * L;
-        uint32_t hi = (uint32_t)(p >> 32);
-        return hi >= n ? 0xFFFFFFFFUL : nnik_div64_32(hi, (uint32_t)p, n); /* hi >= n: a quotient >= 2^32 */
-    }
+    uint32_t hi, lo;
+    hi = mul32(a, L, &lo);
+    return hi >= n ? 0xFFFFFFFFUL : nnik_div64_32(hi, lo, n); /* hi >= n: a quotient >= 2^32 */
 }
 
 void nnik_pl_init(nnik_plan_t *pl, const int32_t p[2])
@@ -46,39 +54,80 @@ uint8_t nnik_pl_ready(const nnik_plan_t *pl, uint8_t flushing)
     return pl->count == NNIK_PL_N || (flushing && pl->count);
 }
 
-/* the junction's speed limit between blocks a and b (b follows a): see nnik_plan.h */
-static uint32_t junction(const nnik_pl_block_t *a, const nnik_pl_block_t *b)
+/* min(a * b, 2^32 - 1) */
+static uint32_t mul_sat(uint32_t a, uint32_t b)
 {
-    int64_t dot = (((int64_t)a->u[0] * b->u[0] + (int64_t)a->u[1] * b->u[1]) >> 30) - NNIK_PL_DOT_MARGIN;
-    uint32_t lim = a->vn < b->vn ? a->vn : b->vn, sn, r, w[2], wn, aj;
-    uint64_t vj2 = 0;
-    uint8_t i;
+    uint32_t lo;
+    return mul32(a, b, &lo) ? 0xFFFFFFFFUL : lo;
+}
+
+/* min(floor(a * b / 2^16), 2^32 - 1) */
+static uint32_t mul_sh16_sat(uint32_t a, uint32_t b)
+{
+    uint32_t lo, hi = mul32(a, b, &lo);
+    return hi >> 16 ? 0xFFFFFFFFUL : (hi << 16) | (lo >> 16);
+}
+
+/* the square of the junction's speed limit between blocks a and b (b follows a), Q16, before the
+ * feeds' cap (2^32 - 1: straight on); see nnik_plan.h */
+static uint32_t junction2(const nnik_pl_block_t *a, const nnik_pl_block_t *b)
+{
+    int32_t dot = (int32_t)((((int64_t)a->u[0] * b->u[0] + (int64_t)a->u[1] * b->u[1]) >> 30) - NNIK_PL_DOT_MARGIN);
+    uint32_t sn, r, hi[2], wl, w2, aj;
+    uint8_t k = 0, e;
     if (dot <= -Q30 + NNIK_PL_REVERSAL)
         return 0; /* a reversal: stop */
     if (dot >= Q30 - NNIK_PL_REVERSAL)
-        return lim; /* straight on */
-    sn = nnik_isqrt64((uint64_t)(Q30 + dot) << 29);
-    r = acc_axis(sn, 0x10000UL, (uint32_t)Q30 - sn);
-    if (r > 0x7FFFFFFFUL)
-        r = 0x7FFFFFFFUL;
-    for (i = 0; i < 2; i++) { /* |w| from the components less their error, each over its own plus it */
-        int64_t d = (int64_t)b->u[i] - a->u[i];
-        uint32_t t;
-        w[i] = (uint32_t)(d < 0 ? -d : d);
-        t = w[i] > 4 ? w[i] - 4 : 0;
-        vj2 += (uint64_t)t * t;
+        return 0xFFFFFFFFUL; /* straight on: the feeds' */
+    sn = nnik_isqrt32((uint32_t)(Q30 + dot) << 1); /* sin(theta / 2), Q16 */
+    hi[0] = uabs32(b->u[0] - a->u[0]) + 4; /* |w_i| + 4 >= the exact w = u2 - u1's (|u| <= 2^30: no overflow) */
+    hi[1] = uabs32(b->u[1] - a->u[1]) + 4;
+    for (; (hi[0] | hi[1]) >= 0x8000UL; k++) { /* to 15 bits, halving, rounded up */
+        hi[0] = (hi[0] + 1) >> 1;
+        hi[1] = (hi[1] + 1) >> 1;
     }
-    wn = nnik_isqrt64(vj2);
-    aj = acc_axis(NNIK_GC_ACC_X, wn, w[0] + 4);
-    wn = acc_axis(NNIK_GC_ACC_Y, wn, w[1] + 4);
-    if (wn < aj)
-        aj = wn;
+    /* each hi_i is at most the exact |w_i| 2^-k + 9: |hi| - 13 <= |w| 2^-k */
+    w2 = nnik_mul16((uint16_t)hi[0], (uint16_t)hi[0]) + nnik_mul16((uint16_t)hi[1], (uint16_t)hi[1]);
+    wl = nnik_isqrt32(w2);
+    wl = wl > 13 ? wl - 13 : 0;
+    /* the junction's acceleration: the axis limit along w, min_i a_i |w| / |w_i|, on the axis
+     * that binds (a_x hi_y < a_y hi_x: x) */
+#if NNIK_GC_ACC_X == NNIK_GC_ACC_Y
+    aj = acc_axis(NNIK_GC_ACC_X, wl, hi[0] > hi[1] ? hi[0] : hi[1]);
+#else
+    {
+        uint32_t xl, yl, xh = mul32(NNIK_GC_ACC_X, hi[1], &xl), yh = mul32(NNIK_GC_ACC_Y, hi[0], &yl);
+        uint8_t i = xh > yh || (xh == yh && xl > yl);
+        aj = acc_axis(i ? NNIK_GC_ACC_Y : NNIK_GC_ACC_X, wl, hi[i]);
+    }
+#endif
     if (aj > 0x7FFFFFUL)
         aj = 0x7FFFFFUL;
-    vj2 = (uint64_t)aj * NNIK_GC_JDEV_UM * r;
-    if (vj2 >= (uint64_t)lim * lim)
+    /* r = sin / (1 - sin) = 4 sin (1 + sin) / |w|^2, Q16: floor(S 2^14 / w2) 2^(32 - 2k), S = sin (1 + sin)
+     * Q32 (33 bits: sh 2^32 + sl; w2 >= 2^28 when k > 0: the quotient holds 16 bits or more); at most 2^31 - 1 */
+    {
+        uint32_t sl = (sn << 16) + nnik_mul16((uint16_t)sn, (uint16_t)sn);
+        uint8_t sh = sl < (sn << 16);
+        r = ((uint32_t)sh << 14) | (sl >> 18); /* S 2^14 = r 2^32 + (sl << 14) */
+        r = nnik_div64_32(r, sl << 14, w2); /* r < 2^15 < w2: past the straight-on test |w| > 2^20 (Q30), k >= 6 */
+        if (k < 16) {
+            e = (uint8_t)(32 - 2 * k);
+            r = r > (0x7FFFFFFFUL >> e) ? 0x7FFFFFFFUL : r << e;
+        } else
+            r >>= 2 * k - 32;
+    }
+    return mul_sh16_sat(mul_sat(aj, NNIK_GC_JDEV_UM), r);
+}
+
+/* the junction's speed limit between blocks a and b (b follows a): floor(sqrt(j2 2^16)) of its
+ * square j2 (Q16), see nnik_plan.h */
+static uint32_t junction(const nnik_pl_block_t *a, const nnik_pl_block_t *b)
+{
+    uint32_t lim = a->vn < b->vn ? a->vn : b->vn, j2 = junction2(a, b);
+    if (j2 == 0xFFFFFFFFUL)
         return lim;
-    return nnik_isqrt64(vj2);
+    j2 = nnik_isqrt_hl(j2 >> 16, j2 << 16);
+    return j2 < lim ? j2 : lim;
 }
 
 /* exit speeds from the last block back; stops where an exit does not change */
@@ -107,36 +156,46 @@ static void backward(nnik_plan_t *pl)
 void nnik_pl_push(nnik_plan_t *pl, int32_t x, int32_t y, int32_t feed, uint16_t tool)
 {
     int32_t dx = x - pl->last[0], dy = y - pl->last[1];
-    uint32_t ax = uabs32(dx), ay = uabs32(dy), Lq, Lc, acc = 0xFFFFFFFFUL, a;
-    uint64_t m;
+    uint32_t ax = uabs32(dx), ay = uabs32(dy), Lq, Lc, acc;
+    uint32_t m;
     uint8_t f = 0;
     nnik_pl_block_t *b;
     if (!dx && !dy)
         return;
-    m = (uint64_t)ax * ax + (uint64_t)ay * ay;
-    { /* m = n 4^f in [2^60, 2^62): sqrt(n) 2^f to 31 bits; f from n's bit length, one shift */
-        uint32_t top = (uint32_t)(m >> 32);
-        uint8_t bits = top ? 32 : 0;
-        if (!top)
-            top = (uint32_t)m;
+    { /* m = n 4^f in [2^60, 2^62): sqrt(n) 2^f to 31 bits; f from n's bit length; the components
+       * shifted by f, then squared: the same m */
+        uint32_t lo, top = mul32(ax, ax, &lo), l2;
+        uint8_t bits = 0;
+        top += mul32(ay, ay, &l2);
+        lo += l2;
+        top += lo < l2;
+        if (top)
+            bits = 32;
+        else
+            top = lo;
         while (top) {
             top >>= 1;
             bits++;
         }
-        if (bits < 61) {
+        if (bits < 61)
             f = (uint8_t)((62 - bits) >> 1);
-            m <<= 2 * f;
-        }
+        ax <<= f;
+        ay <<= f;
+        top = mul32(ax, ax, &lo);
+        top += mul32(ay, ay, &l2);
+        lo += l2;
+        top += lo < l2;
+        Lq = nnik_isqrt_hl(top, lo);
+        l2 = mul32(Lq, Lq, &m);
+        Lc = Lq + (l2 != top || m != lo); /* >= sqrt(n) 2^f: |u| <= 1 */
     }
-    Lq = nnik_isqrt64(m);
-    Lc = Lq + ((uint64_t)Lq * Lq != m); /* >= sqrt(n) 2^f: |u| <= 1 */
     b = &pl->q[IDX(pl, pl->count)];
     b->end[0] = x;
     b->end[1] = y;
     b->len = Lq >> f;
     b->lfr = (uint16_t)(f >= 16 ? Lq >> (f - 16) : Lq << (16 - f));
-    b->u[0] = (int32_t)acc_axis(ax << f, Q30, Lc);
-    b->u[1] = (int32_t)acc_axis(ay << f, Q30, Lc);
+    b->u[0] = (int32_t)nnik_div64_32(ax >> 2, ax << 30, Lc); /* (|d| 2^f 2^30) / Lc, |d| 2^f <= Lc */
+    b->u[1] = (int32_t)nnik_div64_32(ay >> 2, ay << 30, Lc);
     if (dx < 0)
         b->u[0] = -b->u[0];
     if (dy < 0)
@@ -148,13 +207,14 @@ void nnik_pl_push(nnik_plan_t *pl, int32_t x, int32_t y, int32_t feed, uint16_t 
         pl->feed_vn = (uint32_t)(((uint64_t)(uint32_t)feed << 16) / (60UL * NNIK_GC_SAMPLE_HZ));
     }
     b->vn = pl->feed_vn;
-    if (ax)
-        acc = acc_axis(NNIK_GC_ACC_X, Lq, ax << f);
-    if (ay) {
-        a = acc_axis(NNIK_GC_ACC_Y, Lq, ay << f);
-        if (a < acc)
-            acc = a;
+#if NNIK_GC_ACC_X == NNIK_GC_ACC_Y
+    acc = acc_axis(NNIK_GC_ACC_X, Lq, ax >= ay ? ax : ay);
+#else
+    {
+        uint32_t xl, yl, xh = mul32(NNIK_GC_ACC_X, ay, &xl), yh = mul32(NNIK_GC_ACC_Y, ax, &yl);
+        acc = (xh < yh || (xh == yh && xl <= yl)) ? acc_axis(NNIK_GC_ACC_X, Lq, ax) : acc_axis(NNIK_GC_ACC_Y, Lq, ay);
     }
+#endif
     b->acc = acc;
     b->dbig = 0xFFFFFFFFUL / (2 * acc); /* acc <= a_axis * sqrt(2) < 2^23: 32-bit division */
     b->tool = tool;

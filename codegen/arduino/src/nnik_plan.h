@@ -18,13 +18,17 @@
  *
  * Lookahead.  The queue holds NNIK_PL_N blocks.  When a block arrives, the junction with the
  * block before it gets its speed limit (grbl 1.1's junction deviation, every rounding downward):
- *     dot = ((u1x u2x + u1y u2y) >> 30) - NNIK_PL_DOT_MARGIN (at most the exact cosine: each u
+ *     dot = floor((u1x u2x + u1y u2y) / 2^30) - NNIK_PL_DOT_MARGIN (at most the exact cosine: each u
  *     component is within 2 of the exact one); dot <= -2^30 + NNIK_PL_REVERSAL (grbl's cosine
  *     0.999999): a reversal, 0; dot >= 2^30 - NNIK_PL_REVERSAL: straight on, min(vn1, vn2);
- *     sin(theta/2) = isqrt((2^30 + dot) << 29) (Q30), r = min(floor(sin * 2^16 / (2^30 - sin)), 2^31 - 1);
- *     the junction's acceleration (grbl: the axis limit along w = u2 - u1) from w less its error:
- *     |w| = isqrt(sum max(|w_i| - 4, 0)^2), aj = min(min_i floor(a_i |w| / (|w_i| + 4)), 2^23 - 1);
- *     vj^2 = aj * JDEV_UM * r (Q32), jmax = min(vn1, vn2, isqrt(vj^2)),
+ *     else sin(theta/2) = sn = isqrt((2^30 + dot) << 1) (Q16) and, with w = u2 - u1 per axis,
+ *     hi_i = |w_i| + 4 halved (rounded up) k times to 15 bits (hi_i >= the exact |w_i| 2^-k),
+ *     w2 = hi_x^2 + hi_y^2, wl = isqrt(w2) - 13 (at most the exact |w| 2^-k; 0 if below);
+ *     grbl's r = sin / (1 - sin) = 4 sin (1 + sin) / |w|^2 (no cancellation near straight on) as
+ *     r = floor(S 2^14 / w2) 2^(32 - 2k) (at most 2^31 - 1; shifted down when k > 16), S = sn (2^16 + sn);
+ *     the junction's acceleration (grbl: the axis limit along w) aj = min(min_i floor(a_i wl / hi_i), 2^23 - 1);
+ *     j2 = min(floor(min(aj JDEV_UM, 2^32 - 1) r / 2^16), 2^32 - 1) (Q16: um^2 / sample^2 * 65536),
+ *     jmax = min(vn1, vn2) when j2 = 2^32 - 1, else min(vn1, vn2, isqrt(j2 2^16)),
  * and a backward pass sets every exit speed: the last block's exit is 0, and going back
  *     exit_i = min(jmax_i, isqrt(exit_{i+1}^2 + (t << 17))), t = acc_{i+1} len_{i+1} + (acc_{i+1} lfr_{i+1} >> 16)
  * (jmax_i itself when t >= 2^40 or jmax^2 <= the sum); an exit below acc_i >> 2 (the sampler's

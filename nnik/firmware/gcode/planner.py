@@ -67,21 +67,31 @@ def length_q(dx: int, dy: int) -> tuple[int, int, int]:
     return Lq, Lq + (Lq * Lq != m), f
 
 
-def junction(a: Block, b: Block, cfg: MachineConfig) -> int:
-    """The speed limit at the junction a -> b (nnik_plan.c junction())."""
+def junction2(a: Block, b: Block, cfg: MachineConfig) -> int:
+    """The square of the speed limit at the junction a -> b, Q16, before the feeds' cap (U32:
+    straight on; nnik_plan.c junction2())."""
     dot = ((a.u[0] * b.u[0] + a.u[1] * b.u[1]) >> 30) - DOT_MARGIN
-    lim = min(a.vn, b.vn)
     if dot <= -Q30 + REVERSAL:
         return 0  # a reversal
     if dot >= Q30 - REVERSAL:
-        return lim  # straight on
-    sn = isqrt((Q30 + dot) << 29)
-    r = min((sn << 16) // (Q30 - sn), R_MAX)
+        return U32  # straight on: the feeds'
+    sn = isqrt((Q30 + dot) << 1)  # sin(theta / 2), Q16
     w = [abs(b.u[i] - a.u[i]) for i in range(2)]
-    wn = isqrt(sum(max(c - 4, 0) ** 2 for c in w))
-    aj = min(min(_acc_axis(acc, wn, c + 4) for acc, c in zip(cfg.acc_q16, w)), 0x7FFFFF)
-    vj2 = aj * cfg.junction_dev_um * r
-    return lim if vj2 >= lim * lim else isqrt(vj2)
+    hi, k = [c + 4 for c in w], 0
+    while max(hi) >= 0x8000:  # to 15 bits, halving, rounded up
+        hi, k = [(c + 1) >> 1 for c in hi], k + 1
+    w2 = hi[0] ** 2 + hi[1] ** 2
+    wl = max(isqrt(w2) - 13, 0)  # each hi_i <= the exact |w_i| 2^-k + 9
+    aj = min(min(_acc_axis(acc, wl, c) for acc, c in zip(cfg.acc_q16, hi)), 0x7FFFFF)
+    r = (sn * (0x10000 + sn) << 14) // w2  # 4 sin (1 + sin) / |w|^2, Q16: this 2^(32 - 2k)
+    r = min(r << (32 - 2 * k), R_MAX) if k < 16 else r >> (2 * k - 32)
+    return min(min(aj * cfg.junction_dev_um, U32) * r >> 16, U32)
+
+
+def junction(a: Block, b: Block, cfg: MachineConfig) -> int:
+    """The speed limit at the junction a -> b: floor(sqrt(j2 2^16)) of its square (nnik_plan.c junction())."""
+    j2, lim = junction2(a, b, cfg), min(a.vn, b.vn)
+    return lim if j2 == U32 else min(isqrt(j2 << 16), lim)
 
 
 class Planner:
