@@ -95,6 +95,12 @@ class MachineConfig:
         return ranges.shaper_len(self.shaper_taps)
 
     @property
+    def progress_shift(self) -> int:
+        """NNIK_SH_PSH (nnik.machine.ranges.progress_shift): a sample moves at most the fastest
+        feed, or the sampler's floor (a block's acceleration / 4 <= sqrt(2) a_axis / 4)."""
+        return ranges.progress_shift(max(self.vn_max_q16, *self.acc_q16, 1))
+
+    @property
     def lookahead(self) -> int:
         """The planner's queue in blocks: plan_blocks, or the chip's default depth."""
         return self.plan_blocks or ranges.plan_blocks_for(self.mcu, self.shaper_ram_bytes)
@@ -192,6 +198,7 @@ class MachineConfig:
             out["NNIK_SH_AMPS"] = "{" + ",".join("{" + ",".join(map(str, a)) + "}" for a, _ in pad) + "}"
             out["NNIK_SH_DELAYS"] = "{" + ",".join("{" + ",".join(map(str, d)) + "}" for _, d in pad) + "}"
             out["NNIK_SH_SAME"] = str(int(pad[0] == pad[1]))
+            out["NNIK_SH_PSH"] = str(self.progress_shift)
         return out
 
     def tool_defines(self) -> dict[str, str]:

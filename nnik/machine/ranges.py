@@ -178,10 +178,26 @@ def shaper_len(taps) -> int:
 
 def shaper_ram_bytes(taps) -> int:
     """SRAM of the shaper (nnik_shaper.h): the int16 increments per axis, the running sums of X, Y
-    and the tool's progress (int32), the ring's slot, the tool's planned duty per sample and its
-    6 B of state."""
+    and the tool's progress (int32), the ring's slot, the tool's planned duty and progress per
+    sample, its 6 B of state and its two uint32 of path length."""
     length = shaper_len(taps)
-    return 2 * 2 * length + 3 * 4 + 1 + length + 6 if length else 0
+    return 2 * 2 * length + 3 * 4 + 1 + 2 * length + 6 + 8 if length else 0
+
+
+PROGRESS_SHIFT_MIN = 14  # the tool's progress unit is at finest 2^(16 - 14) = 1/4 um
+
+
+def progress_shift(move_max_q16: int) -> int:
+    """NNIK_SH_PSH: the tool's progress unit is 2^(PSH - 16) um, the finest (PSH >= 14) in which
+    no sample's progress exceeds 255 (uint8 per sample), with every sample moving at most
+    move_max_q16 (Q16 um): a sample's units are floor((fr + moved) / 2^PSH), fr < 2^PSH, so at
+    most (2^PSH - 1 + move_max) >> PSH.  Then every window sum of the progress is at most
+    255 * 255 < 2^16 (the lag and Q[n] - Q[m] fit uint16) and its S = sum A_i W_i at most
+    2^15 (255 * 255) < 2^31 (int32): no overflow, whatever the speed."""
+    shift = PROGRESS_SHIFT_MIN
+    while ((1 << shift) - 1 + move_max_q16) >> shift > 255:
+        shift += 1
+    return shift
 
 
 def shaper_problem(taps, feed_um_min: int, sample_hz: int) -> str | None:

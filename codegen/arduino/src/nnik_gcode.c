@@ -53,12 +53,15 @@ static uint8_t m4_duty(uint16_t tool, uint32_t v, uint32_t vn)
     return (uint8_t)tool;
 }
 
-static void out_sample(nnik_gc_t *g, const int32_t p[2], uint16_t tool, uint32_t v, uint32_t vn)
+static void out_sample(nnik_gc_t *g, const int32_t p[2], uint16_t tool, uint32_t v, uint32_t vn, uint32_t moved)
 {
     int32_t in[2], out[2], d[2];
     uint32_t ticks = SAMPLE_TICKS, a;
 #if NNIK_SH_LEN > 0
     g->sh.t = m4_duty(tool, v, vn);
+    g->sh.moved = moved; /* the tool's progress: the path length moved (nnik_shaper.h) */
+#else
+    (void)moved;
 #endif
     nnik_sh_step(&g->sh, p, g->pt);
     in[0] = NNIK_GC_ORIGIN_X_UM + g->pt[0];
@@ -93,7 +96,7 @@ static void sample(nnik_gc_t *g)
     g->settle = NNIK_SH_LEN;
     g->tail_tool = s.tool;
     g->samples++;
-    out_sample(g, s.p, s.tool, s.v, s.vn);
+    out_sample(g, s.p, s.tool, s.v, s.vn, s.moved);
 }
 
 void nnik_gc_flush(nnik_gc_t *g)
@@ -105,7 +108,7 @@ void nnik_gc_flush(nnik_gc_t *g)
     p[1] = g->pl.start[1];
     while (g->settle) {
         g->settle--;
-        out_sample(g, p, g->tail_tool, 0, 1);
+        out_sample(g, p, g->tail_tool, 0, 1, 0);
     }
 }
 

@@ -322,7 +322,7 @@ void nnik_pl_sample(nnik_plan_t *pl, nnik_pl_sample_t *out)
                 c = fl;
         }
     }
-    out->v = c;
+    out->v = out->moved = c;
     /* rem -= c; past the end: o = c - rem carries into the next blocks */
     if (!reaches(c, pl->r_um, pl->r_fr)) {
         ch = (c >> 16) + ((uint16_t)c > pl->r_fr);
@@ -337,6 +337,7 @@ void nnik_pl_sample(nnik_plan_t *pl, nnik_pl_sample_t *out)
             pl->count--;
             if (!b->exit || !pl->count) { /* a stop: exactly on the end, at rest */
                 stop = 1;
+                out->moved = out->v - o; /* o: past the end */
                 c = 0;
                 pl->r_um = pl->q[pl->head].len; /* the next block (if any) starts from its start */
                 pl->r_fr = pl->q[pl->head].lfr;

@@ -97,11 +97,13 @@ typedef struct {
     uint32_t feed_vn;
 } nnik_plan_t;
 
-/* One sample: the point, the speed used for it, the nominal speed and tool of its block. */
+/* One sample: the point, the speed used for it, the nominal speed and tool of its block, and the
+ * distance moved along the path (Q16 um: v, or on a stop the distance that was left). */
 typedef struct {
     int32_t p[2];
     uint32_t v, vn;
     uint16_t tool;
+    uint32_t moved;
 } nnik_pl_sample_t;
 
 /* At rest at p (um). */

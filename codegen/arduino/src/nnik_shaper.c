@@ -8,6 +8,9 @@
 #if NNIK_SH_LEN > 255 || NNIK_SH_N < 1 || NNIK_SH_N > 10
 #error "NNIK_SH_LEN must be 0..255 and NNIK_SH_N 1..10"
 #endif
+#ifndef NNIK_SH_PSH
+#define NNIK_SH_PSH 14 /* the tool's progress unit: 2^(16 - NNIK_SH_PSH) um */
+#endif
 #include "nnik_flash.h"
 static NNIK_FLASH const uint16_t AMPS[2][NNIK_SH_N] = NNIK_SH_AMPS;
 static NNIK_FLASH const uint8_t DELAYS[2][NNIK_SH_N] = NNIK_SH_DELAYS;
@@ -34,19 +37,6 @@ void nnik_sh_init(nnik_shaper_t *sh, const int32_t p[2])
 #define NNIK_SH_NOINLINE
 #endif
 
-/* max(|x|, |y|): a sample's progress */
-static inline uint16_t maxabs(int16_t x, int16_t y)
-{
-    uint16_t ax = (uint16_t)(x < 0 ? -x : x), ay = (uint16_t)(y < 0 ? -y : y);
-    return ax > ay ? ax : ay;
-}
-
-/* max(|dx|, |dy|) of the increments in slot j: the progress of that sample */
-NNIK_SH_NOINLINE static uint16_t progress(const nnik_shaper_t *sh, uint8_t j)
-{
-    return maxabs(sh->inc[0][j], sh->inc[1][j]);
-}
-
 /* the tool of the sample whose slot was just written (its progress dq), the shaped head lag
  * behind in progress (nnik_shaper.h) */
 static void tool_step(nnik_shaper_t *sh, uint8_t at, uint16_t dq, uint16_t lag)
@@ -57,7 +47,7 @@ static void tool_step(nnik_shaper_t *sh, uint8_t at, uint16_t dq, uint16_t lag)
     while (k > NNIK_SH_LEN - 1 || e > lag) { /* m + 1: its progress leaves Q[n] - Q[m] */
         k--;
         j = (uint8_t)(j + 1 == NNIK_SH_LEN ? 0 : j + 1);
-        e = (uint16_t)(e - progress(sh, j));
+        e = (uint16_t)(e - sh->pq[j]);
     }
     sh->k = k;
     sh->e = e;
@@ -69,6 +59,14 @@ static void tool_step(nnik_shaper_t *sh, uint8_t at, uint16_t dq, uint16_t lag)
 static int16_t shr15(int32_t v)
 {
     return (int16_t)(2 * (int16_t)(v >> 16) + (int16_t)((uint16_t)v >> 15));
+}
+
+/* the lag -floor((16384 - S) / 2^15) = floor((S + 16383) / 2^15) of the progress' sum
+ * 0 <= S <= 2^15 (255 NNIK_SH_LEN) < 2^31 (amplitudes and progress >= 0), by byte moves */
+static uint16_t lag(int32_t S)
+{
+    uint32_t v = (uint32_t)S + 16383;
+    return (uint16_t)(((uint16_t)(v >> 16) << 1) | ((uint16_t)v >> 15));
 }
 
 /* *S += A dw: 0 at a steady speed, no multiply; the sum stays in memory (no register for it
@@ -83,19 +81,20 @@ static inline void tap(int32_t *S, uint16_t A, int16_t dw)
 void nnik_sh_step(nnik_shaper_t *sh, const int32_t p[2], int32_t out[2])
 {
 #if NNIK_SH_LEN > 0
-    uint8_t at = sh->at, k;
+    uint8_t at = sh->at, k, dq;
     int16_t dx = (int16_t)(p[0] - sh->last[0]), dy = (int16_t)(p[1] - sh->last[1]);
-    int16_t dq = (int16_t)maxabs(dx, dy); /* this sample's progress (the rows take it last) */
-#if NNIK_SH_SAME /* both axes on the same taps: one ring index, the progress from the pair read */
+    uint32_t fr = sh->fr + sh->moved; /* the path length moved, Q16 um, less whole units taken */
+    dq = (uint8_t)(fr >> NNIK_SH_PSH); /* this sample's progress in units (<= 255: nnik.machine.ranges) */
+    sh->fr = fr & ((1UL << NNIK_SH_PSH) - 1);
+#if NNIK_SH_SAME /* both axes on the same taps: one ring index */
     for (k = 0; k < NNIK_SH_N; k++) { /* W_k += inc[n] - inc[n - dk] (read before the slot is written) */
         uint8_t d = NNIK_RD_U8(&DELAYS[0][k]);
         if (d) {
             uint16_t A = NNIK_RD_U16(&AMPS[0][k]);
             uint8_t j = at >= d ? (uint8_t)(at - d) : (uint8_t)(at + NNIK_SH_LEN - d);
-            int16_t x = sh->inc[0][j], y = sh->inc[1][j];
-            tap(&sh->s[0], A, (int16_t)(dx - x));
-            tap(&sh->s[1], A, (int16_t)(dy - y));
-            tap(&sh->s[2], A, (int16_t)(dq - (int16_t)maxabs(x, y)));
+            tap(&sh->s[0], A, (int16_t)(dx - sh->inc[0][j]));
+            tap(&sh->s[1], A, (int16_t)(dy - sh->inc[1][j]));
+            tap(&sh->s[2], A, (int16_t)dq - sh->pq[j]);
         }
     }
 #else
@@ -105,7 +104,7 @@ void nnik_sh_step(nnik_shaper_t *sh, const int32_t p[2], int32_t out[2])
             uint16_t A = NNIK_RD_U16(&AMPS[0][k]);
             j = at >= d0 ? (uint8_t)(at - d0) : (uint8_t)(at + NNIK_SH_LEN - d0);
             tap(&sh->s[0], A, (int16_t)(dx - sh->inc[0][j]));
-            tap(&sh->s[2], A, (int16_t)(dq - (int16_t)progress(sh, j)));
+            tap(&sh->s[2], A, (int16_t)dq - sh->pq[j]);
         }
         if (d1) {
             j = at >= d1 ? (uint8_t)(at - d1) : (uint8_t)(at + NNIK_SH_LEN - d1);
@@ -120,7 +119,8 @@ void nnik_sh_step(nnik_shaper_t *sh, const int32_t p[2], int32_t out[2])
     sh->last[1] = p[1];
     sh->inc[0][at] = dx;
     sh->inc[1][at] = dy;
-    tool_step(sh, at, (uint16_t)dq, (uint16_t)-shr15(16384 - sh->s[2]));
+    sh->pq[at] = dq;
+    tool_step(sh, at, dq, lag(sh->s[2]));
     sh->at = (uint8_t)(at + 1 == NNIK_SH_LEN ? 0 : at + 1);
 #else
     uint8_t a;

@@ -44,6 +44,9 @@ typedef struct {
     int32_t s[3];            /* sum_i A_i W_i of X, Y and the tool's progress, W_i = p[n] - p[n - d_i] */
     uint8_t at; /* slot of the next increment */
     uint8_t pd[NNIK_SH_LEN]; /* the tool: planned duties */
+    uint8_t pq[NNIK_SH_LEN]; /* the tool: the plan's progress per sample, in units */
+    uint32_t fr;             /* the path length moved, Q16 um, not yet a whole unit */
+    uint32_t moved;          /* this sample's path length (Q16 um), set before the step */
     uint16_t e;              /* Q[n] - Q[m] */
     uint8_t k, ms, t, duty;  /* n - m, m's slot; this sample's planned duty; the tool's duty */
 #endif

@@ -190,14 +190,14 @@ class Planner:
                 if c < b.exit < v and self.can_go(b.exit, rem):
                     c = b.exit  # down to the exit if it may go at it
                 c = max(c, b.acc >> 2, 1)
-        used = c
+        used = self.moved = c  # moved: the path length of the sample (nnik_pl_sample_t.moved)
         s += c
         stop = False
         while s >= b.l16:
             self.start = b.end
             self.q.pop(0)
             if not b.exit or not self.q:
-                stop, s, c = True, 0, 0
+                stop, s, c, self.moved = True, 0, 0, used - (s - b.l16)
                 break
             s -= b.l16
             b = self.q[0]
@@ -246,6 +246,7 @@ class Stream:
     tool: list[int] = field(default_factory=list)  # tool word (samples) or fixed duty word (rests)
     rest_ticks: list[int] = field(default_factory=list)  # 0 for samples
     block: list[int] = field(default_factory=list)  # push index of the sample's block (-1: rest)
+    moved: list[int] = field(default_factory=list)  # path length of the sample, Q16 um (0: tail, rest)
 
 
 def run_ops_reference(ops: list[tuple], cfg: MachineConfig) -> Stream:
@@ -254,8 +255,9 @@ def run_ops_reference(ops: list[tuple], cfg: MachineConfig) -> Stream:
     pl, sh, st = Planner(cfg), Shaper(cfg), Stream()
     settle, tail_tool = 0, 0
 
-    def out(p, tool, v, vn, blk, kind=0, ticks=0):
+    def out(p, tool, v, vn, blk, kind=0, ticks=0, moved=0):
         st.kind.append(kind)
+        st.moved.append(moved)
         st.planned.append(tuple(p))
         st.shaped.append(sh.step(p) if kind == 0 else st.shaped[-1] if st.shaped else (0, 0))
         st.speed.append(v)
@@ -268,7 +270,7 @@ def run_ops_reference(ops: list[tuple], cfg: MachineConfig) -> Stream:
         nonlocal settle, tail_tool
         p, v, vn, tool, idx = pl.sample()
         settle, tail_tool = cfg.shaper_len, tool
-        out(p, tool, v, vn, idx)
+        out(p, tool, v, vn, idx, moved=pl.moved)
 
     def flush():
         nonlocal settle
@@ -295,4 +297,4 @@ def run_ops_reference(ops: list[tuple], cfg: MachineConfig) -> Stream:
 def duty_of(stream: Stream, cfg: MachineConfig | None = None) -> np.ndarray:
     """OCR2A per segment: the tool word's duty, M4 (0x100) scaled by min(v, vn) / vn; with cfg's
     shaper, in step with the shaped head (nnik.firmware.gcode.tool_shaper)."""
-    return stream_duty(stream.kind, stream.speed, stream.vn, stream.tool, stream.planned, cfg)
+    return stream_duty(stream.kind, stream.speed, stream.vn, stream.tool, stream.moved, cfg)

@@ -38,6 +38,7 @@ class Arrays:
     tool: np.ndarray  # (S,)
     rest_ticks: np.ndarray  # (S,)
     block: np.ndarray  # (S,)
+    moved: np.ndarray  # (S,) path length of the sample, Q16 um (0: the shaper's tail, a rest)
 
 
 _brakes = Planner._can_brake  # the brake test, as the chip does it (inlined below where it is hot)
@@ -58,9 +59,10 @@ def _cruise_len(c: int, rem: int, ve: int, acc: int, most: int) -> int:
     return hi
 
 
-def _drain(pl: Planner, flushing: bool, X: list, Y: list, V: list, B: list) -> None:
+def _drain(pl: Planner, flushing: bool, X: list, Y: list, V: list, B: list, stops: dict) -> None:
     """Sample while the queue is ready (full, or not empty when flushing), appending each
-    sample's point, speed used and block push index."""
+    sample's point, speed used and block push index; stops[row]: the path length moved by a
+    sample that stops (the others move their speed)."""
     q, n = pl.q, pl.n
     s, v = pl.s, pl.v
     while q and (flushing or len(q) == n):
@@ -121,6 +123,7 @@ def _drain(pl: Planner, flushing: bool, X: list, Y: list, V: list, B: list) -> N
                 pl.start = b.end
                 q.pop(0)
                 if not b.exit or not q:
+                    stops[len(V)] = used - (s - b.l16)  # the path length left, not c
                     stop, s, c = True, 0, 0
                     break
                 s -= b.l16
@@ -161,13 +164,14 @@ def run_arrays(ops: list[tuple], cfg: MachineConfig) -> Arrays:
     """ops as run_ops takes them; the same stream, as arrays."""
     pl = Planner(cfg)
     X, Y, V, B = [], [], [], []
+    stops = {}  # row: the path length of a sample that stops
     special = []  # (row, kind, tool, ticks) of the shaper's tail samples and the rests
     tail = cfg.shaper_len
     state = {"sampled": False, "tail_tool": 0, "rows": 0}
     vn_of, tool_of = {}, {}
 
     def flush():
-        _drain(pl, True, X, Y, V, B)
+        _drain(pl, True, X, Y, V, B, stops)
         if len(X) > state["rows"]:  # samples since the last tail: the tail tool is the last one's
             state["sampled"], state["tail_tool"], state["rows"] = True, tool_of[B[-1]], len(X)
         if state["sampled"] and tail:
@@ -183,7 +187,7 @@ def run_arrays(ops: list[tuple], cfg: MachineConfig) -> Arrays:
     for op in ops:
         if op[0] == "push":
             if len(pl.q) == pl.n:
-                _drain(pl, False, X, Y, V, B)
+                _drain(pl, False, X, Y, V, B, stops)
             vn_of[op[5]] = (min(op[3], cfg.max_feed_um_min) << 16) // (60 * cfg.sample_hz)
             tool_of[op[5]] = op[4]
             pl.push(op[1], op[2], op[3], op[4], op[5])
@@ -198,10 +202,10 @@ def run_arrays(ops: list[tuple], cfg: MachineConfig) -> Arrays:
             B.append(-1)
             state["rows"] = len(X)
     flush()
-    return _assemble(X, Y, V, B, special, vn_of, tool_of, cfg)
+    return _assemble(X, Y, V, B, stops, special, vn_of, tool_of, cfg)
 
 
-def _assemble(X, Y, V, B, special, vn_of, tool_of, cfg) -> Arrays:
+def _assemble(X, Y, V, B, stops, special, vn_of, tool_of, cfg) -> Arrays:
     N = len(X)
     planned = np.empty((N, 2), np.int64)
     planned[:, 0], planned[:, 1] = X, Y
@@ -227,7 +231,10 @@ def _assemble(X, Y, V, B, special, vn_of, tool_of, cfg) -> Arrays:
         ok = last >= 0
         held[ok] = shaped[last[ok]]
         shaped[~samp] = held[~samp]
-    return Arrays(kind, planned, shaped, np.asarray(V, dtype=np.int64), vn, tool, rest_ticks, block)
+    speed = np.asarray(V, dtype=np.int64)
+    moved = speed.copy()  # the tail and the rests: speed 0
+    moved[list(stops)] = list(stops.values())
+    return Arrays(kind, planned, shaped, speed, vn, tool, rest_ticks, block, moved)
 
 
 def run_ops(ops: list[tuple], cfg: MachineConfig) -> Stream:
@@ -237,4 +244,4 @@ def run_ops(ops: list[tuple], cfg: MachineConfig) -> Stream:
     a = run_arrays(ops, cfg)
     pairs = lambda m: list(zip(m[:, 0].tolist(), m[:, 1].tolist()))  # noqa: E731
     return Stream(a.kind.tolist(), pairs(a.planned), pairs(a.shaped), a.speed.tolist(), a.vn.tolist(),
-                  a.tool.tolist(), a.rest_ticks.tolist(), a.block.tolist())
+                  a.tool.tolist(), a.rest_ticks.tolist(), a.block.tolist(), a.moved.tolist())

@@ -1,8 +1,9 @@
 """The tool in step with the shaped head: nnik_sh_step's tool_step (codegen/arduino/src/
 nnik_shaper.c), bit for bit, over a whole stream at once.
 
-The planner's progress Q (increments max(|dx|, |dy|) of its samples: on a straight move a fixed
-multiple of the arc length) goes through axis 0's taps as a third axis: the shaped head's
+The planner's progress Q (its path length, in units of 2^(psh - 16) um: Q[n] = floor(sum of the
+samples' path lengths moved (Q16 um) / 2^psh), psh = MachineConfig.progress_shift) goes through
+axis 0's taps as a third axis: the shaped head's
 progress is Q[n] + ((16384 - sum_i A_i (Q[n] - Q[n - d_i])) >> 15), lag[n] the minus of that
 shift.  Sample n gets the planned duty of sample m, the first at or after the
 previous m and n - shaper_len + 1 with Q[m] >= Q[n] - lag[n]: the tool switches when the shaped
@@ -23,16 +24,15 @@ def planned_duty(tool: np.ndarray, v: np.ndarray, vn: np.ndarray) -> np.ndarray:
     return np.where((tool & M4) != 0, base * np.minimum(v, vn) // vn, base)
 
 
-def shaped_duty(pd: np.ndarray, planned: np.ndarray, taps, length: int) -> np.ndarray:
-    """The duty of each sample given its planned duty pd and planned point (N, 2) (the shaper
-    starts at rest at (0, 0)), through the taps (amplitudes, delays) of a shaper of `length`."""
+def shaped_duty(pd: np.ndarray, moved: np.ndarray, taps, length: int, psh: int) -> np.ndarray:
+    """The duty of each sample given its planned duty pd and the path length it moved (Q16 um)
+    (the shaper starts at rest), through the taps (amplitudes, delays) of a shaper of `length`,
+    the progress in units of 2^(psh - 16) um."""
     n = len(pd)
     if not length or not n:
         return pd.copy()
-    planned = np.asarray(planned, dtype=np.int64).reshape(-1, 2)
-    step = np.abs(np.diff(np.vstack([[0, 0], planned]), axis=0)).max(1)
     R = length  # the virtual past: R samples at rest, duty 0
-    Q = np.cumsum(np.concatenate([np.zeros(R, np.int64), step]))
+    Q = np.concatenate([np.zeros(R, np.int64), np.cumsum(np.asarray(moved, dtype=np.int64)) >> psh])
     acc = np.full(n, 16384, np.int64)
     for A, d in zip(*taps):
         if d:
@@ -43,7 +43,7 @@ def shaped_duty(pd: np.ndarray, planned: np.ndarray, taps, length: int) -> np.nd
     return np.concatenate([np.zeros(R, np.int64), pd])[m]
 
 
-def stream_duty(kind, speed, vn, tool, planned=None, cfg=None) -> np.ndarray:
+def stream_duty(kind, speed, vn, tool, moved=None, cfg=None) -> np.ndarray:
     """OCR2A of every segment of a stream (planner.Stream's columns): a rest's tool word is its
     duty; a sample's is planned_duty, and with cfg's shaper, shaped_duty."""
     kind, speed, vn, tool = (np.asarray(c, dtype=np.int64) for c in (kind, speed, vn, tool))
@@ -52,6 +52,6 @@ def stream_duty(kind, speed, vn, tool, planned=None, cfg=None) -> np.ndarray:
         return pd
     out = pd.copy()
     samp = kind == 0
-    pl = np.asarray(planned, dtype=np.int64).reshape(-1, 2)[samp]
-    out[samp] = shaped_duty(pd[samp], pl, cfg.shaper_taps[0], cfg.shaper_len)
+    out[samp] = shaped_duty(pd[samp], np.asarray(moved, dtype=np.int64)[samp], cfg.shaper_taps[0], cfg.shaper_len,
+                            cfg.progress_shift)
     return out

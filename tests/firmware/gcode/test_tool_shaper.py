@@ -15,70 +15,81 @@ from nnik.firmware.config import MachineConfig, shaper_taps
 from nnik.firmware.gcode.tool_shaper import shaped_duty
 
 
-def chip_loop(pd, planned, cfg):
-    """nnik_sh_step's third channel and tool_step as written in C, one sample at a time."""
-    L = cfg.shaper_len
+def chip_loop(pd, moved, cfg):
+    """nnik_sh_step's third channel and tool_step as written in C, one sample at a time: the
+    path length moved (Q16 um) in whole units of 2^(psh - 16) um (uint8), int32 sums, uint16 lag."""
+    L, psh = cfg.shaper_len, cfg.progress_shift
     amps, delays = cfg.shaper_taps[0]
-    inc, pd_r, w = [(0, 0)] * L, [0] * L, [0] * len(amps)
-    e = k = at = 0
-    ms, last = L - 1, (0, 0)
+    pq, pd_r, w = [0] * L, [0] * L, [0] * len(amps)
+    e = k = at = fr = 0
+    ms = L - 1
     out = []
-    prog = lambda j: max(abs(inc[j][0]), abs(inc[j][1]))  # noqa: E731
-    for p, t in zip(planned, pd):
-        d = (p[0] - last[0], p[1] - last[1])
-        dq = max(abs(d[0]), abs(d[1]))
-        s = 16384
+    for mv, t in zip(moved, pd):
+        fr += mv
+        dq, fr = fr >> psh, fr & ((1 << psh) - 1)
+        assert 0 <= dq <= 255  # uint8
+        s = 0
         for i, (A, dk) in enumerate(zip(amps, delays)):
             if dk:
-                w[i] += dq - prog((at - dk) % L)
-                assert -(1 << 15) <= w[i] < 1 << 15  # int16
-                s -= A * w[i]
-        inc[at], last = d, p
-        lag = -(s >> 15)
-        pd_r[at] = t
-        k, e = k + 1, (e + dq) & 0xFFFF
+                w[i] += dq - pq[(at - dk) % L]
+                assert 0 <= w[i] < 1 << 16
+                s += A * w[i]
+        assert 0 <= s < 1 << 31  # int32
+        lag = (s + 16383) >> 15
+        assert lag < 1 << 16 and lag == -((16384 - s) >> 15)  # uint16
+        pq[at], pd_r[at] = dq, t
+        k, e = k + 1, e + dq
         while k > L - 1 or e > lag:
             k -= 1
             ms = 0 if ms + 1 == L else ms + 1
-            e = (e - prog(ms)) & 0xFFFF
+            e -= pq[ms]
+        assert 0 <= e < 1 << 16
         out.append(pd_r[ms])
         at = 0 if at + 1 == L else at + 1
     return np.array(out, dtype=np.int64)
 
 
-def random_stream(seed: int, vmax: int):
-    """(planned points (N, 2), planned duties (N,)): runs of steps in one direction (rests,
-    moves, reversals) and runs of random duties."""
+def move_max(cfg) -> int:
+    """The most a sample of cfg's planner moves along the path, Q16 um (MachineConfig.progress_shift)."""
+    return max(cfg.vn_max_q16, *cfg.acc_q16, 1)
+
+
+def random_stream(seed: int, vmax: int, top: int):
+    """(path length per sample (N,), Q16 um, at most top, planned points (N, 2), planned duties
+    (N,)): runs of steps in one direction (rests, moves, reversals) and runs of random duties."""
     rng = np.random.default_rng(seed)
     runs = int(rng.integers(1, 12))
     steps = np.repeat(rng.integers(-vmax, vmax + 1, (runs, 2)), rng.integers(1, 60, runs), axis=0)
     steps[rng.random(len(steps)) < 0.1] = 0
     planned = np.cumsum(steps, axis=0)
-    return planned, np.resize(np.repeat(rng.integers(0, 256, runs), rng.integers(1, 60, runs)), len(planned))
+    moved = np.minimum(np.hypot(*steps.T.astype(float)) * 65536 + rng.integers(0, 65536, len(steps)), top).astype(np.int64)
+    moved[rng.random(len(steps)) < 0.05] = top  # the fastest
+    moved[(steps == 0).all(1)] = 0
+    return moved, planned, np.resize(np.repeat(rng.integers(0, 256, runs), rng.integers(1, 60, runs)), len(planned))
 
 
 @settings(max_examples=60, deadline=None)
 @given(kind=st.sampled_from(KINDS), f=st.floats(25, 90), zeta=st.floats(0.0, 0.2), hz=st.sampled_from([500, 1000]),
-       seed=st.integers(0, 2**31), vmax=st.integers(1, 150))
-def test_bulk_model_equals_the_chips_loop(kind, f, zeta, hz, seed, vmax):
-    base = MachineConfig(origin_um=(0, 0), sample_hz=hz)
+       seed=st.integers(0, 2**31), vmax=st.integers(1, 150), feed=st.integers(60_000, 7_000_000))
+def test_bulk_model_equals_the_chips_loop(kind, f, zeta, hz, seed, vmax, feed):
     try:
-        cfg = replace(base, shaper=kind, shaper_taps=shaper_taps(kind, {"f_hz": (f, f * 0.9), "zeta": (zeta, zeta)}, hz))
+        cfg = replace(MachineConfig(origin_um=(0, 0), sample_hz=hz, max_feed_um_min=feed), shaper=kind, shaper_taps=shaper_taps(kind, {"f_hz": (f, f * 0.9), "zeta": (zeta, zeta)}, hz))
     except ValueError:  # beyond the SRAM budget: refused with one line (test_shaper)
         return
-    planned, pd = random_stream(seed, vmax)
-    want = chip_loop(pd.tolist(), [tuple(p) for p in planned.tolist()], cfg)
-    assert np.array_equal(shaped_duty(pd, planned, cfg.shaper_taps[0], cfg.shaper_len), want)
+    moved, _, pd = random_stream(seed, vmax, move_max(cfg))
+    want = chip_loop(pd.tolist(), moved.tolist(), cfg)
+    assert np.array_equal(shaped_duty(pd, moved, cfg.shaper_taps[0], cfg.shaper_len, cfg.progress_shift), want)
 
 
 DRIVER = r"""
 #include <stdio.h>
 #include "nnik_shaper.h"
 int main(void) {
-    nnik_shaper_t sh; int32_t p[2], o[2] = {0, 0}, z[2] = {0, 0}; int t;
+    nnik_shaper_t sh; int32_t p[2], o[2] = {0, 0}, z[2] = {0, 0}; int t; long m;
     nnik_sh_init(&sh, z);
-    while (scanf("%d %d %d", &p[0], &p[1], &t) == 3) {
+    while (scanf("%d %d %d %ld", &p[0], &p[1], &t, &m) == 4) {
         sh.t = (uint8_t)t;
+        sh.moved = (uint32_t)m;
         nnik_sh_step(&sh, p, o);
         printf("%d %d %d\n", (int)o[0], (int)o[1], sh.duty);
     }
@@ -89,8 +100,9 @@ int main(void) {
 
 @settings(max_examples=25, deadline=None)
 @given(kind=st.sampled_from(KINDS), kind_y=st.sampled_from(KINDS), f=st.floats(25, 90), zeta=st.floats(0.0, 0.2),
-       hz=st.sampled_from([500, 1000]), seed=st.integers(0, 2**31), vmax=st.integers(1, 150))
-def test_the_c_shaper_equals_the_model(tmp_path_factory, kind, kind_y, f, zeta, hz, seed, vmax):
+       hz=st.sampled_from([500, 1000]), seed=st.integers(0, 2**31), vmax=st.integers(1, 150),
+       feed=st.integers(60_000, 7_000_000))
+def test_the_c_shaper_equals_the_model(tmp_path_factory, kind, kind_y, f, zeta, hz, seed, vmax, feed):
     """nnik_shaper.c itself, built for the host with gcc: the shaped points and the tool's duty
     of every sample equal planner.Shaper's and tool_shaper's (different shapers per axis too)."""
     import subprocess
@@ -103,7 +115,7 @@ def test_the_c_shaper_equals_the_model(tmp_path_factory, kind, kind_y, f, zeta, 
     dyn = {"f_hz": (f, f * 0.8), "zeta": (zeta, zeta)}
     tx, ty = shaper_taps(kind, dyn, hz), shaper_taps(kind_y, dyn, hz)
     try:
-        cfg = replace(MachineConfig(origin_um=(0, 0), sample_hz=hz), shaper=f"{kind}/{kind_y}",
+        cfg = replace(MachineConfig(origin_um=(0, 0), sample_hz=hz, max_feed_um_min=feed), shaper=f"{kind}/{kind_y}",
                       shaper_taps=(tx[0], ty[1]))
     except ValueError:  # beyond the SRAM budget: refused with one line (test_shaper)
         return
@@ -115,10 +127,10 @@ def test_the_c_shaper_equals_the_model(tmp_path_factory, kind, kind_y, f, zeta, 
     subprocess.run(["gcc", "-std=c99", "-O1", "-Wall", "-Werror", f"-I{work}", f"-I{src / 'arduino' / 'src'}",
                     f"-I{src / 'runtime'}", str(work / "drv.c"), str(src / "arduino" / "src" / "nnik_shaper.c"),
                     "-o", str(work / "drv")], check=True)
-    planned, pd = random_stream(seed, vmax)
-    text = "".join(f"{x} {y} {t}\n" for (x, y), t in zip(planned.tolist(), pd.tolist()))
+    moved, planned, pd = random_stream(seed, vmax, move_max(cfg))
+    text = "".join(f"{x} {y} {t} {m}\n" for (x, y), t, m in zip(planned.tolist(), pd.tolist(), moved.tolist()))
     got = np.array([[int(v) for v in ln.split()] for ln in subprocess.run(
         [str(work / "drv")], input=text, capture_output=True, text=True, check=True).stdout.splitlines()])
     sh = Shaper(cfg)
     assert np.array_equal(got[:, :2], np.array([sh.step(tuple(p)) for p in planned.tolist()]))
-    assert np.array_equal(got[:, 2], shaped_duty(pd, planned, cfg.shaper_taps[0], cfg.shaper_len))
+    assert np.array_equal(got[:, 2], shaped_duty(pd, moved, cfg.shaper_taps[0], cfg.shaper_len, cfg.progress_shift))
