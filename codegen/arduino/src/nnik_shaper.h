@@ -14,13 +14,17 @@
  * sample + 2 um) < 2^15, so every |W| < 2^15 and |S| < 2^30.  NNIK_SH_LEN 0: no shaper, the samples pass unchanged, no memory.
  *
  * The tool follows the shaped head (nnik/firmware/gcode/tool_shaper.py repeats it).  The plan's
- * progress Q[n] (increments max(|dx|, |dy|) of its samples, from the rows above: on a straight
- * move a fixed multiple of the arc length) goes through axis 0's taps as a third axis: the shaped
- * head's progress is Q[n] - lag[n], lag = -((16384 - sum_i A_i (Q[n] - Q[n - d_i])) >> 15).  Sample
- * n gets the planned duty (sh->t, set before the step) of sample m, the first at or after the
- * previous m and n - NNIK_SH_LEN + 1 with Q[m] >= Q[n] - lag[n]: the tool switches when the shaped
- * head reaches the planned switch (sh->duty).  Its memory: the running sum S of Q, the planned
- * duties of the last NNIK_SH_LEN samples, the pointer's delay k, m's slot and Q[n] - Q[m].
+ * progress Q[n] is its path length: the caller sets sh->moved, the sample's distance along the
+ * commanded path (nnik_pl_sample_t.moved, Q16 um), and Q[n] = floor(sum of moved / 2^NNIK_SH_PSH)
+ * (units of 2^(NNIK_SH_PSH - 16) um; sh->fr keeps the part below a unit, so rounding never
+ * accumulates; nnik.machine.ranges.progress_shift picks the finest unit, at most 1/4 um, in which
+ * a sample's increment fits uint8).  Q goes through axis 0's taps as a third axis: the shaped
+ * head's progress is Q[n] - lag[n], lag = -((16384 - sum_i A_i (Q[n] - Q[n - d_i])) >> 15)
+ * (every window sum <= 255 * 255 < 2^16, the sum < 2^31).  Sample n gets the planned duty (sh->t,
+ * set before the step) of sample m, the first at or after the previous m and n - NNIK_SH_LEN + 1
+ * with Q[m] >= Q[n] - lag[n]: the tool switches when the shaped head reaches the planned switch
+ * (sh->duty).  Its memory: the running sum S of Q, the planned duties and progress increments of
+ * the last NNIK_SH_LEN samples, the pointer's delay k, m's slot, Q[n] - Q[m] and fr.
  */
 #ifndef NNIK_SHAPER_H
 #define NNIK_SHAPER_H
