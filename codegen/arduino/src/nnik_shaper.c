@@ -9,7 +9,10 @@
 #error "NNIK_SH_LEN must be 0..255 and NNIK_SH_N 1..10"
 #endif
 #ifndef NNIK_SH_PSH
-#define NNIK_SH_PSH 14 /* the tool's progress unit: 2^(16 - NNIK_SH_PSH) um */
+#define NNIK_SH_PSH 14 /* the tool's progress unit: 2^(NNIK_SH_PSH - 16) um */
+#endif
+#if NNIK_SH_PSH < 8 || NNIK_SH_PSH > 24
+#error "NNIK_SH_PSH must be 8..24"
 #endif
 #include "nnik_flash.h"
 static NNIK_FLASH const uint16_t AMPS[2][NNIK_SH_N] = NNIK_SH_AMPS;
@@ -84,7 +87,13 @@ void nnik_sh_step(nnik_shaper_t *sh, const int32_t p[2], int32_t out[2])
     uint8_t at = sh->at, k, dq;
     int16_t dx = (int16_t)(p[0] - sh->last[0]), dy = (int16_t)(p[1] - sh->last[1]);
     uint32_t fr = sh->fr + sh->moved; /* the path length moved, Q16 um, less whole units taken */
-    dq = (uint8_t)(fr >> NNIK_SH_PSH); /* this sample's progress in units (<= 255: nnik.machine.ranges) */
+    /* this sample's progress in units, fr >> NNIK_SH_PSH (<= 255: nnik.machine.ranges), from
+     * fr's bytes: no shift loop */
+#if NNIK_SH_PSH <= 16
+    dq = (uint8_t)(((uint8_t)(fr >> 16) << (16 - NNIK_SH_PSH)) | ((uint8_t)(fr >> 8) >> (NNIK_SH_PSH - 8)));
+#else
+    dq = (uint8_t)(((uint8_t)(fr >> 24) << (24 - NNIK_SH_PSH)) | ((uint8_t)(fr >> 16) >> (NNIK_SH_PSH - 16)));
+#endif
     sh->fr = fr & ((1UL << NNIK_SH_PSH) - 1);
 #if NNIK_SH_SAME /* both axes on the same taps: one ring index */
     for (k = 0; k < NNIK_SH_N; k++) { /* W_k += inc[n] - inc[n - dk] (read before the slot is written) */
