@@ -162,3 +162,17 @@ def test_the_scenarios_tanh_names_are_the_mlp_familys_variants():
     from nnik.machine import ranges
 
     assert ranges.TANH_VARIANTS == tuple(s.name for s in SPECS)
+
+
+@settings(max_examples=200, deadline=None)
+@given(move=st.integers(1, (1 << 24) - 1), fr=st.integers(0, (1 << 24) - 1))
+def test_the_tools_progress_unit_is_the_finest_whose_increment_fits_a_byte(move, fr):
+    """nnik_shaper.h: a sample's progress floor((fr + moved) / 2^PSH), fr < 2^PSH, moved <= move,
+    fits uint8, so no window sum of the tool's channel can overflow (255 * 255 < 2^16, and
+    2^15 times that < 2^31); a unit one step finer would not fit; never finer than 1/4 um."""
+    shift = ranges.progress_shift(move)
+    assert shift >= ranges.PROGRESS_SHIFT_MIN
+    assert ((fr % (1 << shift)) + move) >> shift <= 255
+    assert ((1 << shift) - 1 + move) >> shift <= 255 and 32768 * 255 * 255 < 1 << 31
+    if shift > ranges.PROGRESS_SHIFT_MIN:
+        assert ((1 << (shift - 1)) - 1 + move) >> (shift - 1) > 255

@@ -45,6 +45,7 @@ ALL = ("none",) + KINDS
 def shaped_stream(lines, cfg):
     plan = interpret(lines, cfg)
     s = run_ops(plan.ops, cfg)
+    assert max(s.moved, default=0) <= max(cfg.vn_max_q16, *cfg.acc_q16)  # MachineConfig.progress_shift's bound
     seg = types.SimpleNamespace(ends_um=np.asarray(s.shaped, float).reshape(-1, 2), duty=duty_of(s, cfg),
                                 block=np.asarray(s.block), kind=np.asarray(s.kind),
                                 planned_um=np.asarray(s.planned, float).reshape(-1, 2))
