@@ -130,7 +130,33 @@ static uint32_t junction(const nnik_pl_block_t *a, const nnik_pl_block_t *b)
     return j2 < lim ? j2 : lim;
 }
 
-/* exit speeds from the last block back; stops where an exit does not change */
+/* Exit speeds from the last block back; stops where an exit does not change.
+ *
+ * Why the sampler never passes a junction above its exit, nor changes speed by more than acc.
+ * Write R for the distance left in the block a sample lands in (Q16, after the move), e its exit,
+ * a its acc, and call the state (v, R) "safe" when v <= e, or R > 0 and the brake test holds,
+ * 2 a floor(R / 2^16) >= 4 (ceil(v / 512)^2 - floor(e / 512)^2), which gives R >= (v^2 - e^2) / 2a.
+ * Every speed that can_go() accepts passes its junctions at most at their exits and lands safe.
+ * (1) In a block.  From a safe state with v > e, braking by a per sample (c_j = v - j a, the
+ *     fallback) leaves R - (c_1 + ... + c_j) >= (c_j^2 - e^2) / 2a + j a / 2 > 0 while c_j > e:
+ *     the discrete steps brake sooner than the continuous formula, so no such sample reaches the
+ *     end and the first that may reach it goes at c_m <= e (or at the floor, acc >> 2, which is at
+ *     most e, every nonzero exit being at least its block's floor; toward a stop it creeps at the
+ *     floor and lands on the end).  A speed the sampler picks instead of c_j passed can_go().
+ *     From v <= e, the hold passes can_go() by (2).
+ * (2) Across a junction (the defect this bound fixes: the old bound, isqrt(e^2 + 2 a L), let a
+ *     sample pass at the exit and land up to one sample's travel into the next block, where the
+ *     brake test failed and the fallback then passed the next junction above its exit).  A
+ *     sample that passes the end of block i at c <= exit_i lands at p <= c into block i + 1
+ *     (length L, Q16).  exit_i is at most max(e, X) with X the landing bound
+ *         (X + 512 + a)^2 <= 2 a (L - 65024) + max(e - 511, 0)^2 + a^2   (a, e: block i + 1's),
+ *     rounded down (t << 17 <= 2 a L).  If c <= e the landing is safe (and a sample passing
+ *     block i + 1 whole passes its end at c <= e, the same argument on).  Else c <= X: then
+ *     (X + 512)^2 - max(e - 511, 0)^2 <= 2 a (L - X - 65536) (>= 0, so L > X >= p), and with
+ *     ceil(c / 512) <= (X + 512) / 512, floor(e / 512) >= (e - 511) / 512 and
+ *     floor((L - p) / 2^16) >= (L - X - 65535) / 2^16 the brake test holds at p: safe.
+ * Exits only rise as blocks arrive (each bound grows with the next exit), so a safe state stays
+ * safe.  The acc per sample holds by construction (every candidate is within acc of v). */
 static void backward(nnik_plan_t *pl)
 {
     int8_t k;
@@ -140,10 +166,14 @@ static void backward(nnik_plan_t *pl)
         const nnik_pl_block_t *n = &pl->q[IDX(pl, k + 1)];
         uint64_t t = (uint64_t)n->acc * n->len + (((uint64_t)n->acc * n->lfr) >> 16), e2;
         uint32_t ex = b->jmax;
-        if (t < (1ULL << 40)) {
-            e2 = (uint64_t)n->exit * n->exit + (t << 17);
-            if ((uint64_t)ex * ex > e2)
-                ex = nnik_isqrt64(e2);
+        if (t < (1ULL << 40) && ex > n->exit) {
+            uint32_t a = n->acc, e = n->exit > 511 ? n->exit - 511 : 0;
+            uint64_t aa = (uint64_t)a * 130048, x = (uint64_t)ex + 512 + a;
+            e2 = (t << 17) + (uint64_t)e * e + (uint64_t)a * a; /* > aa: t << 17 >= 2 a 65536 when len >= 1 */
+            if (x * x > e2 - aa) { /* ex above the landing bound X (see above) */
+                x = e2 - aa > (uint64_t)(a + 512) * (a + 512) ? nnik_isqrt64(e2 - aa) - 512 - a : 0;
+                ex = x > n->exit ? (uint32_t)x : n->exit;
+            }
         }
         if (ex < (b->acc >> 2))
             ex = 0; /* below the sampler's floor: a stop */
