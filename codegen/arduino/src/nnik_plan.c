@@ -130,33 +130,47 @@ static uint32_t junction(const nnik_pl_block_t *a, const nnik_pl_block_t *b)
     return j2 < lim ? j2 : lim;
 }
 
-/* Exit speeds from the last block back; stops where an exit does not change.
+/* The acceleration the backward pass brakes by over block k + 1: the least of its own and of
+ * every block a sample may start in and land in it from (block k, and each block m before it
+ * while the blocks between are shorter than max(vn_m, acc_m), the most a sample of m travels).
  *
- * Why the sampler never passes a junction above its exit, nor changes speed by more than acc.
- * Write R for the distance left in the block a sample lands in (Q16, after the move), e its exit,
- * a its acc, and call the state (v, R) "safe" when v <= e, or R > 0 and the brake test holds,
- * 2 a floor(R / 2^16) >= 4 (ceil(v / 512)^2 - floor(e / 512)^2), which gives R >= (v^2 - e^2) / 2a.
- * Every speed that can_go() accepts passes its junctions at most at their exits and lands safe.
- * (1) In a block.  From a safe state with v > e, braking by a per sample (c_j = v - j a, the
- *     fallback) leaves R - (c_1 + ... + c_j) >= (c_j^2 - e^2) / 2a + j a / 2 > 0 while c_j > e:
- *     the discrete steps brake sooner than the continuous formula, so no such sample reaches the
- *     end and the first that may reach it goes at c_m <= e (or at the floor, acc >> 2, which is at
- *     most e, every nonzero exit being at least its block's floor; toward a stop it creeps at the
- *     floor and lands on the end).  A speed the sampler picks instead of c_j passed can_go().
- *     From v <= e, the hold passes can_go() by (2).
- * (2) Across a junction (the defect this bound fixes: the old bound, isqrt(e^2 + 2 a L), let a
- *     sample pass at the exit and land up to one sample's travel into the next block, where the
- *     brake test failed and the fallback then passed the next junction above its exit).  A
- *     sample that passes the end of block i at c <= exit_i lands at p <= c into block i + 1
- *     (length L, Q16).  exit_i is at most max(e, X) with X the landing bound
- *         (X + 512 + a)^2 <= 2 a (L - 65024) + max(e - 511, 0)^2 + a^2   (a, e: block i + 1's),
- *     rounded down (t << 17 <= 2 a L).  If c <= e the landing is safe (and a sample passing
- *     block i + 1 whole passes its end at c <= e, the same argument on).  Else c <= X: then
- *     (X + 512)^2 - max(e - 511, 0)^2 <= 2 a (L - X - 65536) (>= 0, so L > X >= p), and with
- *     ceil(c / 512) <= (X + 512) / 512, floor(e / 512) >= (e - 511) / 512 and
- *     floor((L - p) / 2^16) >= (L - X - 65535) / 2^16 the brake test holds at p: safe.
- * Exits only rise as blocks arrive (each bound grows with the next exit), so a safe state stays
- * safe.  The acc per sample holds by construction (every candidate is within acc of v). */
+ * Why the sampler then never passes a junction above its exit (the defect this fixes: braking by
+ * block k + 1's own acc, a sample that passes the junction at the exit could land up to its own
+ * travel into block k + 1, above the braking curve there when acc_{k+1} > acc_k; the next samples,
+ * braking by acc_{k+1}, then passed its end above its exit).  On the path position y, let F(y) =
+ * e^2 + 2 acc (distance to the block's end) in the block y lies in (e its exit): the square of
+ * the speed from which the block can still brake.  Every speed the sampler accepts by can_go()
+ * satisfies c^2 <= F(y) where it lands (c <= e, or the brake test, which gives c^2 - e^2 <=
+ * 2 acc R with R the exact distance left: ceil and floor there only tighten it), and passes its
+ * junctions at most at their exits.  The fallback c' = c - a (a: the head block's acc, a sample
+ * from y to y' = y + c') keeps it:  c'^2 = c^2 - 2 a c + a^2 <= F(y) - 2 a (y' - y) - a^2.  The
+ * backward pass gives exit_i^2 <= exit_{i+1}^2 + 2 a_i' L_{i+1} with a_i' <= a for every block
+ * the sample can start in (this function), so, summing over the blocks between, F(y) - F(y')
+ * <= 2 a (y' - y) (where the landing block's acc exceeds a, its own F falls slower than by a
+ * from a height at least 2 (acc - a) L above the bound) and F(y) - 2 a (J - y) <= exit^2 at each
+ * junction J it passes: c'^2 <= F(y') - a^2 and c'^2 <= exit^2 - a^2 there.  The floor (acc >> 2)
+ * only acts below a, toward a stop (where the sample lands exactly on the end) or an exit at
+ * least the floor (the backward pass makes smaller exits stops).  Exits only rise as blocks
+ * arrive and as blocks leave the queue (a only rises), so F only rises: an accepted state
+ * stays safe.  Every candidate is within acc of v: each speed change is within its limit. */
+static uint32_t brake_acc(const nnik_plan_t *pl, int8_t k)
+{
+    const nnik_pl_block_t *b = &pl->q[IDX(pl, k)];
+    uint32_t a = pl->q[IDX(pl, k + 1)].acc, gap = 0;
+    if (b->acc < a)
+        a = b->acc;
+    while (k > 0 && b->len < 256) { /* a block of 256 um or more: beyond a sample's travel (< 2^24) */
+        gap += (b->len << 16) | b->lfr;
+        b = &pl->q[IDX(pl, --k)];
+        if (gap >= b->vn && gap >= b->acc)
+            break;
+        if (b->acc < a)
+            a = b->acc;
+    }
+    return a;
+}
+
+/* exit speeds from the last block back; stops where an exit does not change */
 static void backward(nnik_plan_t *pl)
 {
     int8_t k;
@@ -164,16 +178,13 @@ static void backward(nnik_plan_t *pl)
     for (k = (int8_t)pl->count - 2; k >= 0; k--) {
         nnik_pl_block_t *b = &pl->q[IDX(pl, k)];
         const nnik_pl_block_t *n = &pl->q[IDX(pl, k + 1)];
-        uint64_t t = (uint64_t)n->acc * n->len + (((uint64_t)n->acc * n->lfr) >> 16), e2;
+        uint32_t a = brake_acc(pl, k);
+        uint64_t t = (uint64_t)a * n->len + (((uint64_t)a * n->lfr) >> 16), e2;
         uint32_t ex = b->jmax;
-        if (t < (1ULL << 40) && ex > n->exit) {
-            uint32_t a = n->acc, e = n->exit > 511 ? n->exit - 511 : 0;
-            uint64_t aa = (uint64_t)a * 130048, x = (uint64_t)ex + 512 + a;
-            e2 = (t << 17) + (uint64_t)e * e + (uint64_t)a * a; /* > aa: t << 17 >= 2 a 65536 when len >= 1 */
-            if (x * x > e2 - aa) { /* ex above the landing bound X (see above) */
-                x = e2 - aa > (uint64_t)(a + 512) * (a + 512) ? nnik_isqrt64(e2 - aa) - 512 - a : 0;
-                ex = x > n->exit ? (uint32_t)x : n->exit;
-            }
+        if (t < (1ULL << 40)) {
+            e2 = (uint64_t)n->exit * n->exit + (t << 17);
+            if ((uint64_t)ex * ex > e2)
+                ex = nnik_isqrt64(e2);
         }
         if (ex < (b->acc >> 2))
             ex = 0; /* below the sampler's floor: a stop */

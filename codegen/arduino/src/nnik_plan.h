@@ -29,12 +29,12 @@
  *     the junction's acceleration (grbl: the axis limit along w) aj = min(min_i floor(a_i wl / hi_i), 2^23 - 1);
  *     j2 = min(floor(min(aj JDEV_UM, 2^32 - 1) r / 2^16), 2^32 - 1) (Q16: um^2 / sample^2 * 65536),
  *     jmax = min(vn1, vn2) when j2 = 2^32 - 1, else min(vn1, vn2, isqrt(j2 2^16)),
- * and a backward pass sets every exit speed: the last block's exit is 0, and going back, with
- * t = acc_{i+1} len_{i+1} + (acc_{i+1} lfr_{i+1} >> 16), a = acc_{i+1}, e = exit_{i+1}:
- *     exit_i = jmax_i when jmax_i <= e or t >= 2^40, else min(jmax_i, max(e, X)), the landing bound
- *     X = isqrt(M - 130048 a) - 512 - a, M = (t << 17) + max(e - 511, 0)^2 + a^2 (0 when
- *     M - 130048 a <= (a + 512)^2): a sample passing the junction at or below it may land up to its
- *     own travel into block i + 1 and still brake there (nnik_plan.c backward() proves it); an exit below acc_i >> 2 (the sampler's
+ * and a backward pass sets every exit speed: the last block's exit is 0, and going back
+ *     exit_i = min(jmax_i, isqrt(exit_{i+1}^2 + (t << 17))), t = a len_{i+1} + (a lfr_{i+1} >> 16),
+ * a the least acc of block i + 1 and of the blocks a sample may start in and land in it from
+ * (block i, and each block m before it while the lengths of the blocks between sum to less than
+ * max(vn_m, acc_m); the sum stops at a block of 256 um or more; nnik_plan.c brake_acc() proves
+ * why) (jmax_i itself when t >= 2^40 or jmax^2 <= the sum); an exit below acc_i >> 2 (the sampler's
  * floor) becomes 0, a stop; the pass stops where an exit does not change.  There is no forward
  * pass: the sampler below never changes speed by more than acc per sample.
  *

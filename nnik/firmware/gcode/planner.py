@@ -4,9 +4,9 @@ codegen/arduino/src/nnik_plan.c (its header states every rule and rounding; in s
 * units: um (machine frame less the work origin), speeds Q16 um/sample, accelerations Q16
   um/sample^2, unit vectors Q30; a block is a line or an arc chord;
 * lookahead: grbl 1.1's junction deviation (the junction vector's axis limit) at each junction,
-  rounded downward, a backward pass for the exit speeds (each at most the landing bound: a sample
-  passing the junction lands up to its own travel into the next block and can still brake
-  there), the last queued block ending at rest;
+  rounded downward, a backward pass for the exit speeds (braking by the least acceleration of the
+  block and of the blocks a sample may start in and land in it from), the last queued block
+  ending at rest;
   the sampler changes speed by at most the block's acceleration per sample (the forward pass is
   implicit) and passes a block end only at most at its exit, able to brake in the block it
   lands in (nnik.bench.planner_oracle is the float grbl planner it is checked against);
@@ -96,14 +96,19 @@ def junction(a: Block, b: Block, cfg: MachineConfig) -> int:
     return lim if j2 == U32 else min(isqrt(j2 << 16), lim)
 
 
-def landing_max(t: int, e: int, a: int) -> int:
-    """The largest speed X at which a sample may pass into a block (t = floor(a L16 / 2^16), exit e,
-    acceleration a) and land anywhere up to X into it with the block's brake test passing there
-    (nnik_plan.c landing_max(), whose comment proves it): (X + 512 + a)^2 <= 2 a (L16 - 65024) + E^2
-    + a^2, E = max(e - 511, 0); 0 when there is no such X."""
-    m = (t << 17) + max(e - 511, 0) ** 2 + a * a
-    k = 130048 * a + (a + 512) ** 2
-    return isqrt(m - 130048 * a) - 512 - a if m > k else 0
+def brake_acc(q: list[Block], k: int) -> int:
+    """The acceleration the backward pass brakes by over block k + 1 (nnik_plan.c brake_acc()): the
+    least of its own and of every block before it that a sample may start in and land in it from
+    (block k, and each q[m] while the blocks between are shorter than a sample of q[m] travels,
+    at most max(vn, acc))."""
+    a, gap, m = min(q[k + 1].acc, q[k].acc), 0, k
+    while m > 0:
+        gap += q[m].l16
+        m -= 1
+        if gap >= max(q[m].vn, q[m].acc):
+            break
+        a = min(a, q[m].acc)
+    return a
 
 
 class Planner:
@@ -150,9 +155,12 @@ class Planner:
         q[-1].exit = 0
         for k in range(len(q) - 2, -1, -1):
             b, n = q[k], q[k + 1]
-            t, ex = n.acc * n.len + ((n.acc * n.lfr) >> 16), b.jmax
-            if t < 1 << 40 and ex > n.exit:
-                ex = max(min(ex, landing_max(t, n.exit, n.acc)), n.exit)
+            a = brake_acc(q, k)
+            t, ex = a * n.len + ((a * n.lfr) >> 16), b.jmax
+            if t < 1 << 40:
+                e2 = n.exit * n.exit + (t << 17)
+                if ex * ex > e2:
+                    ex = isqrt(e2)
             if ex < b.acc >> 2:
                 ex = 0  # below the sampler's floor: a stop
             if ex == b.exit:
