@@ -132,7 +132,8 @@ static uint32_t junction(const nnik_pl_block_t *a, const nnik_pl_block_t *b)
 
 /* The acceleration the backward pass brakes by over block k + 1: the least of its own and of
  * every block a sample may start in and land in it from (block k, and each block m before it
- * while the blocks between are shorter than max(vn_m, acc_m), the most a sample of m travels).
+ * while the whole um of the blocks between are at most max(vn_m, acc_m) >> 16: a sample of m
+ * travels at most max(vn_m, acc_m), and must travel farther than the blocks between).
  *
  * Why the sampler then never passes a junction above its exit (the defect this fixes: braking by
  * block k + 1's own acc, a sample that passes the junction at the exit could land up to its own
@@ -153,21 +154,22 @@ static uint32_t junction(const nnik_pl_block_t *a, const nnik_pl_block_t *b)
  * least the floor (the backward pass makes smaller exits stops).  Exits only rise as blocks
  * arrive and as blocks leave the queue (a only rises), so F only rises: an accepted state
  * stays safe.  Every candidate is within acc of v: each speed change is within its limit. */
-static uint32_t brake_acc(const nnik_plan_t *pl, int8_t k)
+static uint32_t brake_acc(const nnik_plan_t *pl, uint8_t k, uint32_t a)
 {
-    const nnik_pl_block_t *b = &pl->q[IDX(pl, k)];
-    uint32_t a = pl->q[IDX(pl, k + 1)].acc, gap = 0;
-    if (b->acc < a)
-        a = b->acc;
-    while (k > 0 && b->len < 256) { /* a block of 256 um or more: beyond a sample's travel (< 2^24) */
-        gap += (b->len << 16) | b->lfr;
-        b = &pl->q[IDX(pl, --k)];
-        if (gap >= b->vn && gap >= b->acc)
-            break;
+    uint8_t i = IDX(pl, k);
+    const nnik_pl_block_t *b = &pl->q[i];
+    uint16_t gap = 0; /* whole um: at most the lengths between, so never too few blocks */
+    for (;;) {
         if (b->acc < a)
             a = b->acc;
+        if (!k-- || b->len >= 256) /* a block of 256 um or more: beyond a sample's travel (< 2^24) */
+            return a;
+        gap += (uint8_t)b->len;
+        i = (uint8_t)((i ? i : NNIK_PL_N) - 1);
+        b = &pl->q[i];
+        if (gap > (uint8_t)(b->vn >> 16) && gap > (uint8_t)(b->acc >> 16)) /* speeds < 2^24 */
+            return a;
     }
-    return a;
 }
 
 /* exit speeds from the last block back; stops where an exit does not change */
@@ -178,7 +180,7 @@ static void backward(nnik_plan_t *pl)
     for (k = (int8_t)pl->count - 2; k >= 0; k--) {
         nnik_pl_block_t *b = &pl->q[IDX(pl, k)];
         const nnik_pl_block_t *n = &pl->q[IDX(pl, k + 1)];
-        uint32_t a = brake_acc(pl, k);
+        uint32_t a = brake_acc(pl, (uint8_t)k, n->acc);
         uint64_t t = (uint64_t)a * n->len + (((uint64_t)a * n->lfr) >> 16), e2;
         uint32_t ex = b->jmax;
         if (t < (1ULL << 40)) {

@@ -100,12 +100,12 @@ def brake_acc(q: list[Block], k: int) -> int:
     """The acceleration the backward pass brakes by over block k + 1 (nnik_plan.c brake_acc()): the
     least of its own and of every block before it that a sample may start in and land in it from
     (block k, and each q[m] while the blocks between are shorter than a sample of q[m] travels,
-    at most max(vn, acc))."""
+    at most max(vn, acc); the lengths between in whole um, against that >> 16))."""
     a, gap, m = min(q[k + 1].acc, q[k].acc), 0, k
     while m > 0:
-        gap += q[m].l16
+        gap += q[m].len
         m -= 1
-        if gap >= max(q[m].vn, q[m].acc):
+        if gap > max(q[m].vn, q[m].acc) >> 16:
             break
         a = min(a, q[m].acc)
     return a
