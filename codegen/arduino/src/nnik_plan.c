@@ -150,8 +150,10 @@ static uint32_t junction(const nnik_pl_block_t *a, const nnik_pl_block_t *b)
  * <= 2 a (y' - y) (where the landing block's acc exceeds a, its own F falls slower than by a
  * from a height at least 2 (acc - a) L above the bound) and F(y) - 2 a (J - y) <= exit^2 at each
  * junction J it passes: c'^2 <= F(y') - a^2 and c'^2 <= exit^2 - a^2 there.  The floor (acc >> 2)
- * only acts below a, toward a stop (where the sample lands exactly on the end) or an exit at
- * least the floor (the backward pass makes smaller exits stops).  Exits only rise as blocks
+ * only acts when c < a + floor: toward a stop the sample lands exactly on the end; else it passes
+ * its own block's end at most at the exit (the backward pass makes exits under the floor stops).
+ * (Not covered: a floor-speed sample that lands past a junction into a block of less than half
+ * its acc may sit above F there by one step of that block's acc.)  Exits only rise as blocks
  * arrive and as blocks leave the queue (a only rises), so F only rises: an accepted state
  * stays safe.  Every candidate is within acc of v: each speed change is within its limit. */
 static uint32_t brake_acc(const nnik_plan_t *pl, uint8_t k, uint32_t a)
