@@ -130,6 +130,50 @@ static uint32_t junction(const nnik_pl_block_t *a, const nnik_pl_block_t *b)
     return j2 < lim ? j2 : lim;
 }
 
+/* The acceleration the backward pass brakes by over block k + 1: the least of its own and of
+ * every block a sample may start in and land in it from (block k, and each block m before it
+ * while the whole um of the blocks between are at most max(vn_m, acc_m) >> 16: a sample of m
+ * travels at most max(vn_m, acc_m), and must travel farther than the blocks between).
+ *
+ * Why the sampler then never passes a junction above its exit (the defect this fixes: braking by
+ * block k + 1's own acc, a sample that passes the junction at the exit could land up to its own
+ * travel into block k + 1, above the braking curve there when acc_{k+1} > acc_k; the next samples,
+ * braking by acc_{k+1}, then passed its end above its exit).  On the path position y, let F(y) =
+ * e^2 + 2 acc (distance to the block's end) in the block y lies in (e its exit): the square of
+ * the speed from which the block can still brake.  Every speed the sampler accepts by can_go()
+ * satisfies c^2 <= F(y) where it lands (c <= e, or the brake test, which gives c^2 - e^2 <=
+ * 2 acc R with R the exact distance left: ceil and floor there only tighten it), and passes its
+ * junctions at most at their exits.  The fallback c' = c - a (a: the head block's acc, a sample
+ * from y to y' = y + c') keeps it:  c'^2 = c^2 - 2 a c + a^2 <= F(y) - 2 a (y' - y) - a^2.  The
+ * backward pass gives exit_i^2 <= exit_{i+1}^2 + 2 a_i' L_{i+1} with a_i' <= a for every block
+ * the sample can start in (this function), so, summing over the blocks between, F(y) - F(y')
+ * <= 2 a (y' - y) (where the landing block's acc exceeds a, its own F falls slower than by a
+ * from a height at least 2 (acc - a) L above the bound) and F(y) - 2 a (J - y) <= exit^2 at each
+ * junction J it passes: c'^2 <= F(y') - a^2 and c'^2 <= exit^2 - a^2 there.  The floor (acc >> 2)
+ * only acts when c < a + floor: toward a stop the sample lands exactly on the end; else it passes
+ * its own block's end at most at the exit (the backward pass makes exits under the floor stops).
+ * (Not covered: a floor-speed sample that lands past a junction into a block of less than half
+ * its acc may sit above F there by one step of that block's acc.)  Exits only rise as blocks
+ * arrive and as blocks leave the queue (a only rises), so F only rises: an accepted state
+ * stays safe.  Every candidate is within acc of v: each speed change is within its limit. */
+static uint32_t brake_acc(const nnik_plan_t *pl, uint8_t k, uint32_t a)
+{
+    uint8_t i = IDX(pl, k);
+    const nnik_pl_block_t *b = &pl->q[i];
+    uint16_t gap = 0; /* whole um: at most the lengths between, so never too few blocks */
+    for (;;) {
+        if (b->acc < a)
+            a = b->acc;
+        if (!k-- || b->len >= 256) /* a block of 256 um or more: beyond a sample's travel (< 2^24) */
+            return a;
+        gap += (uint8_t)b->len;
+        i = (uint8_t)((i ? i : NNIK_PL_N) - 1);
+        b = &pl->q[i];
+        if (gap > (uint8_t)(b->vn >> 16) && gap > (uint8_t)(b->acc >> 16)) /* speeds < 2^24 */
+            return a;
+    }
+}
+
 /* exit speeds from the last block back; stops where an exit does not change */
 static void backward(nnik_plan_t *pl)
 {
@@ -138,7 +182,8 @@ static void backward(nnik_plan_t *pl)
     for (k = (int8_t)pl->count - 2; k >= 0; k--) {
         nnik_pl_block_t *b = &pl->q[IDX(pl, k)];
         const nnik_pl_block_t *n = &pl->q[IDX(pl, k + 1)];
-        uint64_t t = (uint64_t)n->acc * n->len + (((uint64_t)n->acc * n->lfr) >> 16), e2;
+        uint32_t a = brake_acc(pl, (uint8_t)k, n->acc);
+        uint64_t t = (uint64_t)a * n->len + (((uint64_t)a * n->lfr) >> 16), e2;
         uint32_t ex = b->jmax;
         if (t < (1ULL << 40)) {
             e2 = (uint64_t)n->exit * n->exit + (t << 17);

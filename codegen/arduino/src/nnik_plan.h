@@ -30,8 +30,10 @@
  *     j2 = min(floor(min(aj JDEV_UM, 2^32 - 1) r / 2^16), 2^32 - 1) (Q16: um^2 / sample^2 * 65536),
  *     jmax = min(vn1, vn2) when j2 = 2^32 - 1, else min(vn1, vn2, isqrt(j2 2^16)),
  * and a backward pass sets every exit speed: the last block's exit is 0, and going back
- *     exit_i = min(jmax_i, isqrt(exit_{i+1}^2 + (t << 17))), t = acc_{i+1} len_{i+1} + (acc_{i+1} lfr_{i+1} >> 16)
- * (jmax_i itself when t >= 2^40 or jmax^2 <= the sum); an exit below acc_i >> 2 (the sampler's
+ *     exit_i = min(jmax_i, isqrt(exit_{i+1}^2 + (t << 17))), t = a len_{i+1} + (a lfr_{i+1} >> 16),
+ * a the least acc of block i + 1 and of the blocks a sample may start in and land in it from
+ * (block i, and each block m before it while the whole um (len) of the blocks between sum to at
+ * most max(vn_m, acc_m) >> 16; nnik_plan.c brake_acc() proves why) (jmax_i itself when t >= 2^40 or jmax^2 <= the sum); an exit below acc_i >> 2 (the sampler's
  * floor) becomes 0, a stop; the pass stops where an exit does not change.  There is no forward
  * pass: the sampler below never changes speed by more than acc per sample.
  *

@@ -4,7 +4,9 @@ codegen/arduino/src/nnik_plan.c (its header states every rule and rounding; in s
 * units: um (machine frame less the work origin), speeds Q16 um/sample, accelerations Q16
   um/sample^2, unit vectors Q30; a block is a line or an arc chord;
 * lookahead: grbl 1.1's junction deviation (the junction vector's axis limit) at each junction,
-  rounded downward, a backward pass for the exit speeds, the last queued block ending at rest;
+  rounded downward, a backward pass for the exit speeds (braking by the least acceleration of the
+  block and of the blocks a sample may start in and land in it from), the last queued block
+  ending at rest;
   the sampler changes speed by at most the block's acceleration per sample (the forward pass is
   implicit) and passes a block end only at most at its exit, able to brake in the block it
   lands in (nnik.bench.planner_oracle is the float grbl planner it is checked against);
@@ -94,6 +96,21 @@ def junction(a: Block, b: Block, cfg: MachineConfig) -> int:
     return lim if j2 == U32 else min(isqrt(j2 << 16), lim)
 
 
+def brake_acc(q: list[Block], k: int) -> int:
+    """The acceleration the backward pass brakes by over block k + 1 (nnik_plan.c brake_acc()): the
+    least of its own and of every block before it that a sample may start in and land in it from
+    (block k, and each q[m] while the blocks between are shorter than a sample of q[m] travels,
+    at most max(vn, acc); the lengths between in whole um, against that >> 16))."""
+    a, gap, m = min(q[k + 1].acc, q[k].acc), 0, k
+    while m > 0:
+        gap += q[m].len
+        m -= 1
+        if gap > max(q[m].vn, q[m].acc) >> 16:
+            break
+        a = min(a, q[m].acc)
+    return a
+
+
 class Planner:
     """nnik_plan_t: the queue, the head's progress and the speed."""
 
@@ -138,7 +155,8 @@ class Planner:
         q[-1].exit = 0
         for k in range(len(q) - 2, -1, -1):
             b, n = q[k], q[k + 1]
-            t, ex = n.acc * n.len + ((n.acc * n.lfr) >> 16), b.jmax
+            a = brake_acc(q, k)
+            t, ex = a * n.len + ((a * n.lfr) >> 16), b.jmax
             if t < 1 << 40:
                 e2 = n.exit * n.exit + (t << 17)
                 if ex * ex > e2:
