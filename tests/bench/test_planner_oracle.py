@@ -53,7 +53,7 @@ def test_no_junction_and_no_acceleration_above_grbls_limits(pieces, lim, feed_sh
 
 
 @pytest.mark.xfail(reason="measured 1.00-2.09 on 25 random paths (2.09 with 2 blocks at 500 Hz; 1.14 on 0.01 mm "
-                          "chords). What dominates at stops (session 11, h-samp): a 50 um reversal at 500 Hz, 8 um/"
+                          "chords). What dominates at stops: a 50 um reversal at 500 Hz, 8 um/"
                           "sample^2 takes 9 samples against the float's 5: the brake test's continuous need holds "
                           "the speed low a sample early and the last um are crept at the floor (acc / 4 per sample), "
                           "since no tested speed may reach a stop's end",
