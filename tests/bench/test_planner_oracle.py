@@ -87,7 +87,7 @@ def test_oracle_trapezoid_and_lookahead():
     assert t2 > t16 > tinf
 
 
-# found by the random comparison (session 11): grbl's limit at one junction is 4,572 um/s and the sampler
+# found by the random comparison: grbl's limit at one junction is 4,572 um/s and the sampler
 # passed it at 4,720 (1.032x). The exit before it (block 10's, 535,330 Q16) was isqrt(e^2 + 2 a L) of
 # block 11 (71.8 um): the sampler held that exit to 0.03 um short of the junction, so the next
 # sample (at least v - acc) landed 7.9 um into block 11, where braking by acc per sample passed its
