@@ -39,7 +39,8 @@ house: setup
 # 300 random G-code jobs per machine on the simulated Uno against the Python model (CI runs 10),
 # 30 random galvos and 20 random belt frames through the ladders, 12 random measured frames' claims,
 # and the G-code firmware's planner and input shaper on the simulated Uno (job time, step rate,
-# sample loop CPU %, flash and SRAM; nnik.bench.motion), seed 003's table (its L path, reference
+# sample loop CPU %, flash and SRAM; nnik.bench.motion; cycles a block push, nnik.bench.plan_push, and the
+# sample loop's cycles by part, nnik.bench.sample_profile), seed 003's table (its L path, reference
 # case and ten variations: the tip with each compensation; nnik.bench.seed003), and the speed of
 # `nnik job` on a 305 s raster: the Python model alone and with the simulated Uno, each over the
 # whole command, as times real time (nnik.bench.job_speed); the cost models against simavr and
@@ -59,6 +60,8 @@ bench: setup toolchains
 	$(PYTHON) -m nnik.bench.reproducible datasets/corexy_nonlinear.toml datasets/corexy_measured_2000.toml
 	$(PYTHON) -m nnik run datasets/corexy_nonlinear.toml > /dev/null && $(PYTHON) -m nnik.bench.builds build/galvo_cba2012 build/corexy_nonlinear
 	$(PYTHON) -m nnik.bench.plan_ram build/galvo_cba2012 build/corexy_nonlinear
+	$(PYTHON) -m nnik.bench.plan_push && $(PYTHON) -m nnik.bench.plan_push --scenario galvo_cba2012
+	$(PYTHON) -m nnik.bench.sample_profile build/galvo_cba2012 datasets/jobs/circle.gcode
 	$(PYTHON) -m nnik.bench.mlp_cost sweep
 	$(PYTHON) -m nnik.bench.estimator
 	$(PYTHON) -m nnik.bench.costs
