@@ -29,6 +29,8 @@ SERVO_US_PER_COUNT = 64  # Timer2 at 16 MHz / 1024: 61 Hz, 64 us per count
 
 from nnik.machine import ranges
 from nnik.machine.domain import domain_um
+from nnik.machine.motor_limits import KEYS as MOTOR_KEYS
+from nnik.machine.motor_limits import motor_rows
 from nnik.machine.ranges import Q16 as SCALE_ONE
 
 
@@ -72,6 +74,18 @@ class MachineConfig:
     # build options, as grbl's config.h: g5 (Marlin's Bezier), g93 (inverse time), planes (arcs in
     # G18/G19), wcs (G10, G55-G59, G28.1, G30.1); a line that needs one left out is error 20
     features: frozenset = FEATURES
+    # motor limits after the IK (nnik.machine.motor_limits.motor_rows): per motor (cx, cy, d Q15,
+    # head-equivalent v um/s, a um/s^2; 0: none) and the head's speed cap vc um/s (0: none); () without
+    motor_rows: tuple = ()
+    motor_vc_um_s: int = 0
+
+    @property
+    def motor_q16(self) -> tuple:
+        """Per motor (cx, cy, d, v, a) with v, a as Q16 per sample (0: none), and vc Q16 (0: none)."""
+        lim = ranges.SPEED_Q16_LIMIT, ranges.ACC_Q16_LIMIT
+        rows = tuple((cx, cy, d, *(ranges.motor_q16(x, self.sample_hz, k + 1, lim[k]) if x else 0 for k, x in enumerate((v, a))))
+                     for cx, cy, d, v, a in self.motor_rows)
+        return rows, ranges.motor_q16(self.motor_vc_um_s, self.sample_hz, 1, ranges.SPEED_Q16_LIMIT)
 
     @property
     def rapid_um_min(self) -> int:
@@ -164,6 +178,9 @@ class MachineConfig:
             raise ValueError(problem)
         if self.plan_blocks and not 2 <= self.plan_blocks <= 64:
             raise ValueError("planner queue must be 2..64 blocks")
+        for cx, cy, d, v, a in self.motor_rows:
+            if ranges.motor_problem(v, a, self.sample_hz) or max(abs(cx), abs(cy)) + d > ranges.MOTOR_Q15 + 2:
+                raise ValueError(f"motor limits: {ranges.motor_problem(v, a, self.sample_hz) or 'row out of Q15'}")
         if self.mcu not in ranges.MCU_RAM_BYTES:
             raise ValueError(f"unknown MCU {self.mcu!r}; known: {', '.join(ranges.MCU_RAM_BYTES)}")
 
@@ -191,6 +208,7 @@ class MachineConfig:
         out = {"NNIK_GC_SAMPLE_HZ": f"{self.sample_hz}UL", "NNIK_GC_ACC_X": f"{ax}UL", "NNIK_GC_ACC_Y": f"{ay}UL",
                "NNIK_GC_JDEV_UM": f"{self.junction_dev_um}UL", "NNIK_GC_MAX_FEED_UM_MIN": f"{self.max_feed_um_min}L",
                "NNIK_PL_N": str(self.lookahead), "NNIK_SH_LEN": str(self.shaper_len)}
+        out.update(self.motor_defines())
         if self.shaper_taps:
             n = max(len(a) for a, _ in self.shaper_taps)
             pad = [(list(a) + [0] * (n - len(a)), list(d) + [0] * (n - len(d))) for a, d in self.shaper_taps]
@@ -199,6 +217,18 @@ class MachineConfig:
             out["NNIK_SH_DELAYS"] = "{" + ",".join("{" + ",".join(map(str, d)) + "}" for _, d in pad) + "}"
             out["NNIK_SH_SAME"] = str(int(pad[0] == pad[1]))
             out["NNIK_SH_PSH"] = str(self.progress_shift)
+        return out
+
+    def motor_defines(self) -> dict[str, str]:
+        """nnik_plan.c motor_caps()'s constants; none without motor limits (the C as before)."""
+        if not self.motor_rows:
+            return {}
+        rows, vc = self.motor_q16
+        out = {"NNIK_GC_MOTOR": "1", "NNIK_GC_MOTOR_V": str(int(any(r[3] for r in rows))),
+               "NNIK_GC_MOTOR_A": str(int(any(r[4] for r in rows))), "NNIK_GC_MOTOR_VC": f"{vc}UL"}
+        for i, (cx, cy, d, v, a) in enumerate(rows):
+            out.update({f"NNIK_GC_M{i}_CX": f"{cx}L", f"NNIK_GC_M{i}_CY": f"{cy}L", f"NNIK_GC_M{i}_D": f"{d}UL",
+                        f"NNIK_GC_M{i}_V": f"{v or 0xFFFFFFFF}UL", f"NNIK_GC_M{i}_A": f"{a or 0xFFFFFFFF}UL"})
         return out
 
     def tool_defines(self) -> dict[str, str]:
@@ -239,10 +269,13 @@ def default_machine(scn, shaper: str | None = None) -> MachineConfig:
     ints = ranges.motion_ints({**{k: p.default for k, p in MOTION.items()}, **mo, "sample_hz": sample_hz})
     origin = tuple(int(v) for v in (lo + hi) // 2)
     bounds = tuple(tuple(int(v) - o for v, o in zip(e, origin)) for e in (lo, hi))
+    rows, vc = motor_rows(scn.mechanism, scn.actuator, scn.workspace, {**mo, "sample_hz": sample_hz}, scn.source) \
+        if any(mo.get(k) is not None for k in MOTOR_KEYS) else ((), 0)
     return MachineConfig(origin_um=origin, tool=kind, bounds_um=bounds, features=UNO_FEATURES,
                          accel_um_s2=ints["accel_um_s2"], junction_dev_um=ints["jdev_um"],
                          max_feed_um_min=ints["feed_um_min"],
-                         sample_hz=sample_hz, shaper=sh, shaper_taps=taps, shaper_design=designs, **tool)
+                         sample_hz=sample_hz, shaper=sh, shaper_taps=taps, shaper_design=designs,
+                         motor_rows=rows, motor_vc_um_s=vc, **tool)
 
 
 def shaper_taps(kind: str, dynamics: dict | None, sample_hz: int) -> tuple:

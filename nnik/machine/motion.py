@@ -8,6 +8,8 @@ may do, and how the machine's axes ring.
           shaper                         none | zv | mzv | zvd | ei | 2hump_ei | 3hump_ei | auto (default
                                          none; per axis, as Klipper: the [shaper] table instead)
           max_contour_um                 auto's contour-error target (optional)
+          motor_max_speed, motor_max_accel   per motor, in its own units per s / s^2 (optional;
+                                         nnik.machine.motor_limits: microsteps, mirror degrees, counts)
 [dynamics] f_hz = [fx, fy], zeta = [zx, zy]
           One base-excited spring-damper per Cartesian axis (seed 003; the model Klipper measures
           and shapes per X and Y, CoreXY included: its two belts move the head together in X and
@@ -19,7 +21,7 @@ from __future__ import annotations
 
 from nnik.dynamics.shapers import KINDS
 from nnik.errors import NnikError
-from nnik.machine import ranges
+from nnik.machine import motor_limits, ranges
 from nnik.machine.params import Param, validate_table, within
 
 SHAPERS = ("none",) + KINDS + ("auto",)
@@ -56,7 +58,9 @@ def _pair(value, key: str, source: str) -> tuple[float, float]:
 
 def validate_motion(motion_raw, dynamics_raw, source: str) -> tuple[dict, dict | None]:
     """([motion] with defaults, [dynamics] as {"f_hz": (fx, fy), "zeta": (zx, zy)} or None)."""
-    motion = validate_table(motion_raw, MOTION, source, "motion")
+    motor = motor_limits.parse_keys(motion_raw, source) if isinstance(motion_raw, dict) else {}
+    rest = {k: v for k, v in motion_raw.items() if k not in motor} if isinstance(motion_raw, dict) else motion_raw
+    motion = {**validate_table(rest, MOTION, source, "motion"), **motor}
     for key, problem in ranges.motion_problems(**ranges.motion_ints(motion)):
         raise NnikError(problem, source, f"[motion] {key}")
     if dynamics_raw is None or dynamics_raw == {}:

@@ -119,6 +119,33 @@ def motion_problems(accel_um_s2: tuple[int, int], jdev_um: int, feed_um_min: int
     return [(k, p) for k, p in found if p]
 
 
+# [motion] motor_max_speed / motor_max_accel (nnik.machine.motor_limits): in the actuator's own units
+# per s and per s^2 (microsteps, mirror degrees, encoder counts); per motor, the head's equivalent
+# bound along its worst direction must leave the firmware a speed and an acceleration it can run
+MOTOR_SPEED_RANGE = (1e-6, 1e9)
+MOTOR_ACCEL_RANGE = (1e-6, 1e12)
+MOTOR_Q15 = 1 << 15  # the motor rows' coefficients (nnik_plan.c motor_caps)
+SQRT2_UP = 1.41431  # >= sqrt(2) (1 + 2 / 2^15): a block's n_i / Lq at most this
+MOTOR_V_Q16_MIN = 2  # the worst direction's speed cap, Q16 um/sample, floor(V / SQRT2_UP) >= 1
+MOTOR_A_Q16_MIN = math.ceil(ACC_Q16_MIN * SQRT2_UP) + 1  # the block's acc stays >= ACC_Q16_MIN
+
+
+def motor_q16(v_um_s: int, sample_hz: int, per_sample: int, limit: int) -> int:
+    """um/s (per_sample 1) or um/s^2 (per_sample 2) as Q16 per sample, floor, at most limit."""
+    return min(int(v_um_s) * Q16 // sample_hz ** per_sample, limit)
+
+
+def motor_problem(v_um_s: int, a_um_s2: int, sample_hz: int) -> str | None:
+    """A motor's head-equivalent bound (um/s, um/s^2; 0: none) that the firmware cannot run."""
+    if v_um_s and motor_q16(v_um_s, sample_hz, 1, SPEED_Q16_LIMIT) < MOTOR_V_Q16_MIN:
+        return (f"lets the head move at most {v_um_s / 1000:g} mm/s along its worst direction, below the firmware's "
+                f"least speed ({MOTOR_V_Q16_MIN} Q16 um/sample at {sample_hz} Hz); raise it")
+    if a_um_s2 and motor_q16(a_um_s2, sample_hz, 2, ACC_Q16_LIMIT) < MOTOR_A_Q16_MIN:
+        return (f"lets the head accelerate at most {a_um_s2 / 1000:g} mm/s^2 along its worst direction, below the "
+                f"firmware's least acceleration ({MOTOR_A_Q16_MIN} Q16 um/sample^2 at {sample_hz} Hz); raise it")
+    return None
+
+
 def motion_ints(motion: dict) -> dict:
     """[motion] (mm units, defaults filled) as the firmware's integers, the one conversion."""
     return {"accel_um_s2": (um(motion["accel_x_mm_s2"]), um(motion["accel_y_mm_s2"])),

@@ -15,6 +15,7 @@ from nnik.machine.kinematics import KINDS, Mechanism, Workspace
 from nnik.machine import ranges
 from nnik.machine.kinematics.measured import check_marks_for_network
 from nnik.machine.motion import validate_motion
+from nnik.machine.motor_limits import motor_rows
 from nnik.machine.servo import ServoConfig, servo_tables
 from nnik.machine.shaper_table import validate_shaper
 from nnik.machine.params import MAX_LENGTH_MM, Param, positive, validate_table
@@ -247,6 +248,7 @@ class Scenario:
         tool = validate_table(top["tool"], TOOL, source, "tool")
         motion, dynamics = validate_motion(top["motion"], top["dynamics"], source)
         shaper = validate_shaper(top["shaper"], motion, top["motion"], source)
+        motor_rows(mechanism, actuator, workspace, motion, source)  # the motor limits' check
         if export["tanh"] != "default" and export["tanh"] not in ranges.TANH_VARIANTS:
             raise NnikError(f"unknown tanh variant; choose one of default, {', '.join(ranges.TANH_VARIANTS)}",
                             source, "[export] tanh")

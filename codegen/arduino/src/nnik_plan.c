@@ -198,6 +198,52 @@ static void backward(nnik_plan_t *pl)
     }
 }
 
+#if NNIK_GC_MOTOR
+/* one motor's n = ceil((|cx dx + cy dy| + d Lc / 2^f) 2^f / 2^15), the row's Q15 coefficients
+ * and margin d (nnik/machine/motor_limits.py): n / Lq >= (|J0 . u| + delta) / s, at most
+ * sqrt(2) (1 + 2^-14) Lc < 2^32 (max(|cx|, |cy|) + d <= 2^15 + 2); ax, ay = |dx|, |dy| 2^f */
+#ifdef __GNUC__
+__attribute__((noinline))
+#endif
+static uint32_t motor_n(int32_t cx, int32_t cy, uint32_t d, int32_t dx, int32_t dy, uint32_t ax, uint32_t ay,
+                        uint32_t Lc)
+{
+    int64_t s = (int64_t)((dx < 0) ? -cx : cx) * ax + (int64_t)((dy < 0) ? -cy : cy) * ay;
+    return (uint32_t)(((uint64_t)(s < 0 ? -s : s) + (uint64_t)d * Lc + 0x7FFF) >> 15);
+}
+
+/* the motor limits after the IK: per motor, b->vn <= V Lq / n and acc <= A Lq / n (acc_axis: floor),
+ * and b->vn <= NNIK_GC_MOTOR_VC (the head's cap of a nonlinear IK; 0: none); returns the acc */
+static uint32_t motor_caps(nnik_pl_block_t *b, uint32_t acc, int32_t dx, int32_t dy, uint32_t ax, uint32_t ay,
+                           uint32_t Lq, uint32_t Lc)
+{
+    uint32_t n[2], cap;
+    uint8_t i;
+    n[0] = motor_n(NNIK_GC_M0_CX, NNIK_GC_M0_CY, NNIK_GC_M0_D, dx, dy, ax, ay, Lc);
+    n[1] = motor_n(NNIK_GC_M1_CX, NNIK_GC_M1_CY, NNIK_GC_M1_D, dx, dy, ax, ay, Lc);
+    for (i = 0; i < 2; i++) {
+        if (!n[i])
+            continue;
+#if NNIK_GC_MOTOR_V
+        cap = acc_axis(i ? NNIK_GC_M1_V : NNIK_GC_M0_V, Lq, n[i]);
+        if (cap < b->vn)
+            b->vn = cap;
+#endif
+#if NNIK_GC_MOTOR_A
+        cap = acc_axis(i ? NNIK_GC_M1_A : NNIK_GC_M0_A, Lq, n[i]);
+        if (cap < acc)
+            acc = cap;
+#endif
+    }
+#if NNIK_GC_MOTOR_VC
+    if (b->vn > NNIK_GC_MOTOR_VC)
+        b->vn = NNIK_GC_MOTOR_VC;
+#endif
+    (void)cap;
+    return acc;
+}
+#endif
+
 void nnik_pl_push(nnik_plan_t *pl, int32_t x, int32_t y, int32_t feed, uint16_t tool)
 {
     int32_t dx = x - pl->last[0], dy = y - pl->last[1];
@@ -259,6 +305,9 @@ void nnik_pl_push(nnik_plan_t *pl, int32_t x, int32_t y, int32_t feed, uint16_t 
         uint32_t xl, yl, xh = mul32(NNIK_GC_ACC_X, ay, &xl), yh = mul32(NNIK_GC_ACC_Y, ax, &yl);
         acc = (xh < yh || (xh == yh && xl <= yl)) ? acc_axis(NNIK_GC_ACC_X, Lq, ax) : acc_axis(NNIK_GC_ACC_Y, Lq, ay);
     }
+#endif
+#if NNIK_GC_MOTOR
+    acc = motor_caps(b, acc, dx, dy, ax, ay, Lq, Lc);
 #endif
     b->acc = acc;
     b->dbig = 0xFFFFFFFFUL / (2 * acc); /* acc <= a_axis * sqrt(2) < 2^23: 32-bit division */

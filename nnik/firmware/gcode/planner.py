@@ -111,6 +111,19 @@ def brake_acc(q: list[Block], k: int) -> int:
     return a
 
 
+def motor_caps(cfg: MachineConfig, dx: int, dy: int, Lq: int, Lc: int, f: int, vn: int, acc: int) -> tuple[int, int]:
+    """(vn, acc) within the motor limits after the IK (nnik_plan.c motor_caps(); the rows:
+    nnik.machine.motor_limits): per motor n = ceil((|cx dx + cy dy| + d Lc 2^-f) 2^f / 2^15),
+    vn <= floor(V Lq / n), acc <= floor(A Lq / n); vn <= vc."""
+    rows, vc = cfg.motor_q16
+    for cx, cy, d, v, a in rows:
+        n = (abs(cx * (dx << f) + cy * (dy << f)) + d * Lc + 0x7FFF) >> 15
+        if n:
+            vn = min(vn, _acc_axis(v, Lq, n)) if v else vn
+            acc = min(acc, _acc_axis(a, Lq, n)) if a else acc
+    return (min(vn, vc) if vc else vn), acc
+
+
 class Planner:
     """nnik_plan_t: the queue, the head's progress and the speed."""
 
@@ -141,6 +154,7 @@ class Planner:
         for a, d in zip(self.acc, (dx, dy)):
             if d:
                 acc = min(acc, _acc_axis(a, Lq, abs(d) << f))
+        vn, acc = motor_caps(self.cfg, dx, dy, Lq, Lc, f, vn, acc) if self.cfg.motor_rows else (vn, acc)
         u = tuple((abs(d) << (30 + f)) // Lc * (-1 if d < 0 else 1) for d in (dx, dy))
         lfr = (Lq >> (f - 16) if f >= 16 else Lq << (16 - f)) & 0xFFFF
         b = Block((x, y), u, Lq >> f, vn, acc, tool, index, lfr)
