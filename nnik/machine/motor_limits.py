@@ -95,15 +95,15 @@ def motor_rows(mechanism, actuator, workspace, motion: dict, source: str = "<sce
         for i in range(2):
             if K[i] * vfeed * vfeed > accel[i] / 2:
                 vmax = min(vmax, math.sqrt(accel[i] / (2 * K[i])))
-    vc = int(vmax * 1000) if vmax < vfeed else 0
+    vc = max(int(vmax * 1000), 1) if vmax < vfeed else 0  # 1 at least: 0 means none
     rows = []
     for i in range(2):
         s = float(np.abs(J0[i]).max() + delta[i])
         c = [int(round(x / s * ranges.MOTOR_Q15)) for x in J0[i]]
         exact = all(x / s * ranges.MOTOR_Q15 == ci for x, ci in zip(J0[i], c))
         d = math.ceil(delta[i] / s * ranges.MOTOR_Q15) + (0 if exact else 1)
-        v = int(1000 * speed[i] / s) if speed is not None else 0
-        a = int(1000 * (accel[i] - K[i] * vmax * vmax) / s) if accel is not None else 0
+        v = max(int(1000 * speed[i] / s), 1) if speed is not None else 0
+        a = max(int(1000 * (accel[i] - K[i] * vmax * vmax) / s), 1) if accel is not None else 0
         problem = ranges.motor_problem(v, a, motion["sample_hz"]) or ranges.motor_problem(vc, 0, motion["sample_hz"])
         if problem:
             raise NnikError(f"motor {i + 1} {problem}", source, where)
