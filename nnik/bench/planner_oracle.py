@@ -8,6 +8,8 @@ nnik.firmware.gcode.planner). It takes the interpreter's operations and the same
 * nominal speed vn = min(F, max feed) / 60 (um/s);
 * block acceleration a = min over the moving axes of a_axis / |u_axis| (grbl's
   limit_value_by_axis_maximum), so no axis exceeds its own limit along the block;
+* with motor limits (MachineConfig.motor_rows), vn and a also at most each motor's limit along u
+  (motor_limit: grbl's rule on the motor axes, the same rows as the firmware's);
 * junction (grbl's junction deviation): cos_theta = -(u_prev . u); above 0.999999 (a reversal)
   the junction speed is 0 (MINIMUM_JUNCTION_SPEED); below -0.999999 (straight on) it is
   unlimited; else with the junction unit vector w = (u - u_prev) / |u - u_prev|, its
@@ -78,6 +80,20 @@ def junction_limit(u0, u1, vn0: float, vn1: float, accel: tuple[float, float], d
     return min(cap, math.sqrt(a_j * dev_um * s / (1.0 - s)))
 
 
+def motor_limit(cfg, u: tuple[float, float]) -> tuple[float, float]:
+    """The motor limits after the IK along u (cfg.motor_rows, nnik.machine.motor_limits): the
+    largest speed (um/s) and acceleration (um/s^2) with every motor within its own, per motor
+    V / (|c . u| + d) and A / (|c . u| + d) (the rows in Q15), and the speed at most vc."""
+    v = a = math.inf
+    for cx, cy, d, vm, am in getattr(cfg, "motor_rows", ()):
+        n = (abs(cx * u[0] + cy * u[1]) + d) / 32768.0
+        if n > 0:
+            v = min(v, vm / n) if vm else v
+            a = min(a, am / n) if am else a
+    vc = getattr(cfg, "motor_vc_um_s", 0)
+    return (min(v, vc) if vc else v), a
+
+
 def blocks_of(ops: list[tuple], cfg) -> list[list[FBlock]]:
     """The pushes as float blocks, in runs that end at rest (a flush or rest op ends a run)."""
     accel = tuple(float(a) for a in cfg.accel_um_s2)
@@ -93,8 +109,9 @@ def blocks_of(ops: list[tuple], cfg) -> list[list[FBlock]]:
             continue
         L = math.hypot(dx, dy)
         u = (dx / L, dy / L)
-        vn = min(op[3], cfg.max_feed_um_min) / 60.0
-        b = FBlock(op[5], L, u, vn, axis_limit(accel, u))
+        mv, ma = motor_limit(cfg, u)
+        vn = min(op[3] / 60.0, cfg.max_feed_um_min / 60.0, mv)
+        b = FBlock(op[5], L, u, vn, min(axis_limit(accel, u), ma))
         if cur:
             p = cur[-1]
             b.entry_max = junction_limit(p.u, u, p.vn, vn, accel, float(cfg.junction_dev_um))
