@@ -136,6 +136,9 @@ def test_bad_motor_limits_get_one_clear_error():
         with pytest.raises(NnikError, match=r"\[motion\] motor_max_"):
             scenario("corexy_nonlinear", bad)
 
+    with pytest.raises(NnikError, match=r"\[motion\] motor_max_sped: unknown key .*motor_max_accel, motor_max_speed"):
+        scenario("corexy_nonlinear", {"motor_max_sped": 5000})
+
 
 def test_no_motor_limits_no_motor_defines():
     cfg = default_machine(scenario("corexy_nonlinear", {}))
