@@ -100,13 +100,14 @@ def last_end(ops: list) -> tuple[int, int]:
     return 0, 0
 
 
-def as_arc_op(ops: list, k0: int, r: int, acc_q16, length_q, vertex) -> None:
-    """ops[k0:] (the pushes of one arc's chords, radius r um) become one ("arc", x, y, feed,
+def as_arc_op(ops: list, k0: int, r: int, acc_q16, length_q, vertex, k1: int | None = None) -> None:
+    """ops[k0:k1] (the pushes of one arc's chords, radius r um) become one ("arc", x, y, feed,
     tool, index, points, r) operation when the arc is one block by the rules above."""
-    new = ops[k0:]
+    k1 = len(ops) if k1 is None else k1
+    new = ops[k0:k1]
     if len(new) < 2 or any(op[0] != "push" for op in new):
         return
     pts = tuple((op[1], op[2]) for op in new)
     if arc_chords(last_end(ops[:k0]), pts, r, acc_q16, length_q, vertex) is None:
         return
-    ops[k0:] = [("arc",) + new[-1][1:3] + new[0][3:6] + (pts, r)]
+    ops[k0:k1] = [("arc",) + new[-1][1:3] + new[0][3:6] + (pts, r)]
