@@ -2,7 +2,8 @@
 codegen/arduino/src/nnik_plan.c (its header states every rule and rounding; in short):
 
 * units: um (machine frame less the work origin), speeds Q16 um/sample, accelerations Q16
-  um/sample^2, unit vectors Q30; a block is a line or an arc chord;
+  um/sample^2, unit vectors Q30; a block is a line or an arc chord (or, with
+  MachineConfig.arc_blocks, a whole arc: nnik.firmware.gcode.planner_arc, not on the chip yet);
 * lookahead: grbl 1.1's junction deviation (the junction vector's axis limit) at each junction,
   rounded downward, a backward pass for the exit speeds (braking by the least acceleration of the
   block and of the blocks a sample may start in and land in it from), the last queued block
