@@ -4,7 +4,12 @@ model, bit for bit its sampler) and the float oracle's (nnik.bench.planner_oracl
 limits and queue.  On the CAM jobs of the real corpus (datasets/jobs/, the ones with G2/G3, at the
 default seg_um and at 100 um chords) and on random CAM-like paths (arcs of 0.2-20 mm radius in
 0.01-0.2 mm chords, corners, reversals).  Prints each ratio chords / arc blocks (above 1: arc
-blocks are faster).
+blocks are faster).  Then the sampled acceleration inside arcs, both ways: each sample's point
+taken exactly on the chord polyline at the path length the samples moved, its second difference
+per axis against that axis' limit (a line of 5 mm, an arc of 2-20 mm radius in 0.01-0.2 mm
+chords, a line; the samples within 0.3 mm of the arc's ends left out).  Above 1 at the chord
+ends: grbl's junction rule lets a vertex be passed with a jump in direction, and the chord ends
+rounded to whole um kink the polygon more than the arc turns on short chords.
 
     python3 -m nnik.bench.arc_blocks [--seed N] [--paths N]
 """
@@ -30,6 +35,46 @@ def job_seconds(ops: list[tuple], cfg: MachineConfig) -> tuple[float, float]:
     """(integer planner's motion time, float oracle's), s: the samples (rests excluded) / rate."""
     a = run_arrays(ops, cfg)
     return float((a.kind == 0).sum()) / cfg.sample_hz, oracle.plan(ops, cfg).time_s
+
+
+def exact_points(ops: list[tuple], cfg: MachineConfig) -> tuple[np.ndarray, np.ndarray]:
+    """Each sample's point on the exact polyline of the block and chord ends, at the path length
+    the samples moved (um), and that length."""
+    a = run_arrays(ops, cfg)
+    verts = [(0, 0)]
+    for op in ops:
+        if op[0] == "arc":
+            verts += list(op[6])
+        elif op[0] == "push":
+            verts.append(op[1:3])
+    V = np.asarray(verts, float)
+    seg = np.diff(V, axis=0)
+    L = np.hypot(*seg.T)
+    keep = L > 0
+    V, seg, L = np.vstack([V[:1], V[1:][keep]]), seg[keep], L[keep]
+    cum = np.concatenate([[0.0], np.cumsum(L)])
+    s = np.cumsum(a.moved[a.kind == 0] / 65536.0)
+    j = np.clip(np.searchsorted(cum, s, side="right") - 1, 0, len(L) - 1)
+    return V[j] + seg[j] * ((s - cum[j]) / L[j])[:, None], s
+
+
+def arc_axis_accel(rng, n: int) -> dict[bool, list[float]]:
+    """{arc_blocks: the largest sampled per-axis acceleration / the axis' limit inside each arc}."""
+    out: dict[bool, list[float]] = {False: [], True: []}
+    for _ in range(n):
+        acc = (int(rng.integers(300, 5000)) * 1000, int(rng.integers(300, 5000)) * 1000)
+        cfg = MachineConfig(origin_um=(0, 0), accel_um_s2=acc, max_feed_um_min=15_000_000)
+        r, sweep = float(rng.uniform(2000, 20000)), float(rng.uniform(90, 360))
+        pieces = [("line", 5000.0, 0.0), ("arc", r, sweep, float(rng.uniform(10, 200))), ("line", 5000.0, 0.0)]
+        for ab in (False, True):
+            ops = arc_block_ops(pieces, cfg.max_feed_um_min, cfg) if ab else path_ops(pieces, cfg.max_feed_um_min)
+            P, s = exact_points(ops, cfg)
+            mid = s[1:-1]
+            inside = (mid > 5300) & (mid < 5000 + r * np.radians(sweep) - 300)
+            lim = np.asarray(acc, float) / cfg.sample_hz ** 2
+            if inside.any():
+                out[ab].append(float((np.abs(np.diff(P, 2, axis=0)[inside]) / lim).max()))
+    return out
 
 
 def arc_jobs() -> list[Path]:
@@ -79,6 +124,10 @@ def main(argv=None) -> int:
         rf.append(tf0 / tf1)
     print(f"random CAM paths ({args.paths}, 0.01-0.2 mm chords, lookahead 8): integer median {np.median(ri):.3f} "
           f"(min {min(ri):.3f}, max {max(ri):.3f}), float median {np.median(rf):.3f}")
+    acc = arc_axis_accel(rng, args.paths)
+    for ab, name in ((False, "chord blocks"), (True, "arc blocks")):
+        print(f"sampled acceleration inside arcs / the axis limit, {name}: median {np.median(acc[ab]):.2f}, "
+              f"max {max(acc[ab]):.2f} ({len(acc[ab])} arcs)")
     return 0
 
 
