@@ -37,17 +37,22 @@ def job_seconds(ops: list[tuple], cfg: MachineConfig) -> tuple[float, float]:
     return float((a.kind == 0).sum()) / cfg.sample_hz, oracle.plan(ops, cfg).time_s
 
 
-def exact_points(ops: list[tuple], cfg: MachineConfig) -> tuple[np.ndarray, np.ndarray]:
-    """Each sample's point on the exact polyline of the block and chord ends, at the path length
-    the samples moved (um), and that length."""
-    a = run_arrays(ops, cfg)
+def polyline(ops: list[tuple]) -> np.ndarray:
+    """The block ends and chord ends the ops go through, from (0, 0) (um)."""
     verts = [(0, 0)]
     for op in ops:
         if op[0] == "arc":
             verts += list(op[6])
         elif op[0] == "push":
             verts.append(op[1:3])
-    V = np.asarray(verts, float)
+    return np.asarray(verts, float)
+
+
+def exact_points(ops: list[tuple], cfg: MachineConfig) -> tuple[np.ndarray, np.ndarray]:
+    """Each sample's point on the exact polyline of the block and chord ends, at the path length
+    the samples moved (um), and that length."""
+    a = run_arrays(ops, cfg)
+    V = polyline(ops)
     seg = np.diff(V, axis=0)
     L = np.hypot(*seg.T)
     keep = L > 0

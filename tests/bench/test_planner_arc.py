@@ -15,6 +15,7 @@ from hypothesis import HealthCheck, given, note, settings
 from hypothesis import strategies as st
 
 from nnik.bench import planner_oracle as oracle
+from nnik.bench.arc_blocks import polyline
 from nnik.bench.planner_compare import compare
 from nnik.bench.planner_paths import arc_block_ops
 from nnik.firmware.config import MachineConfig
@@ -31,7 +32,7 @@ piece = st.one_of(
 SETTINGS = dict(deadline=None, database=None, suppress_health_check=list(HealthCheck))
 
 
-@settings(max_examples=40, **SETTINGS)
+@settings(max_examples=120, **SETTINGS)
 @given(pieces=st.lists(piece, min_size=1, max_size=12), lim=limits, feed_share=st.floats(0.2, 1.0))
 def test_arc_blocks_within_grbls_limits(pieces, lim, feed_share):
     cfg = machine(lim)
@@ -42,7 +43,7 @@ def test_arc_blocks_within_grbls_limits(pieces, lim, feed_share):
         assert r[key].size == 0 or r[key].max() <= 1.0 + 1e-12, (key, r[key].max())
 
 
-@settings(max_examples=25, **SETTINGS)
+@settings(max_examples=60, **SETTINGS)
 @given(pieces=st.lists(piece, min_size=1, max_size=8), lim=limits)
 def test_arc_blocks_bulk_sampler_is_the_reference_and_walks_the_chords(pieces, lim):
     cfg = machine(lim)
@@ -50,13 +51,7 @@ def test_arc_blocks_bulk_sampler_is_the_reference_and_walks_the_chords(pieces, l
     st_bulk, st_ref = run_ops(ops, cfg), run_ops_reference(ops, cfg)
     assert st_bulk == st_ref
     # each sampled point lies on the polyline of the block ends and chord ends (within 1 um)
-    verts = [(0, 0)]
-    for op in ops:
-        if op[0] == "arc":
-            verts += list(op[6])
-        elif op[0] == "push":
-            verts.append(op[1:3])
-    V = np.asarray(verts, float)
+    V = polyline(ops)
     a, b = V[:-1], V[1:]
     d = b - a
     n2 = np.maximum((d ** 2).sum(1), 1e-12)
