@@ -24,11 +24,11 @@ about 1 um per sample^2).
   in a stop advances only the distance left, d <= c; the step down from d to rest is counted too.
 * Job time: samples * (1 / sample_hz) against the float plan's trapezoid times.
 
-* Nominal speed: each sample's speed against its block's float nominal speed (an arc's holds its
-  centripetal cap and every inner vertex's grbl limit, nnik.bench.planner_oracle).
+* Arc cap: the speed of each sample that starts in an arc block against the float arc's cap (its
+  centripetal limit and every inner vertex's grbl limit, nnik.bench.planner_oracle; the feed aside).
 
 Ratios: junction = integer / float limit (a float limit of 0 with an integer stop is 0), accel
-= integer change / block acceleration, nominal = speed / the block's float vn, time = integer / float.
+= integer change / block acceleration, arc_cap = speed / the arc's float cap, time = integer / float.
 """
 
 from __future__ import annotations
@@ -121,8 +121,8 @@ def compare(ops: list[tuple], cfg, lookahead: int | None = -1) -> dict:
         else:
             prev = d
     t_int = len(m.speed) / hz
-    nominal = [c * to_um_s / blocks[h].vn for c, h in zip(m.speed, m.head)]
+    arc_cap = [c * to_um_s / blocks[h].cap for c, h in zip(m.speed, m.head) if blocks[h].cap < np.inf]
     return {"junction": np.asarray(junction, dtype=float), "accel": np.asarray(accel, dtype=float),
-            "nominal": np.asarray(nominal, dtype=float),
+            "arc_cap": np.asarray(arc_cap, dtype=float),
             "time_int_s": t_int, "time_float_s": fp.time_s,
             "time_ratio": t_int / fp.time_s if fp.time_s > 0 else 1.0}

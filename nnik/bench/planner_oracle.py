@@ -50,6 +50,7 @@ class FBlock:
     acc: float  # um/s^2
     entry_max: float = 0.0  # the junction limit with the block before (0: from rest)
     u_out: tuple[float, float] | None = None  # an arc's last chord's direction (None: u)
+    cap: float = math.inf  # an arc's speed limit, the feed's aside: centripetal and its vertices'
 
 
 @dataclass
@@ -126,10 +127,10 @@ def arc_block(last, op: tuple, vn: float, accel: tuple[float, float], dev_um: fl
             L += n
             p = q
     a = min(accel) / math.sqrt(2.0)
-    vn = min(vn, math.sqrt(a * op[7]))
+    cap = math.sqrt(a * op[7])
     for k in range(1, len(us)):
-        vn = min(vn, junction_limit(us[k - 1], us[k], math.inf, math.inf, accel, dev_um))
-    return FBlock(op[5], L, us[0], vn, a, u_out=us[-1])
+        cap = min(cap, junction_limit(us[k - 1], us[k], math.inf, math.inf, accel, dev_um))
+    return FBlock(op[5], L, us[0], min(vn, cap), a, u_out=us[-1], cap=cap)
 
 
 def block_time(L: float, v0: float, v1: float, vn: float, a: float) -> float:

@@ -1,8 +1,8 @@
 """Arcs planned as one block (nnik/firmware/gcode/planner_arc.py) against the float grbl oracle with
 the same arc rule (nnik/bench/planner_oracle.py arc_block), on random paths: arcs of 0.2-20 mm
 radius in 0.01-0.2 mm chords, corners, reversals.  Every junction <= grbl's float limit, every
-speed change <= the block's acceleration, every speed <= the block's float nominal speed (an
-arc's: its centripetal cap and grbl's limit at each vertex inside); the bulk sampler equals the
+speed change <= the block's acceleration, every speed in an arc <= the float arc's cap (its
+centripetal limit and grbl's limit at each vertex inside); the bulk sampler equals the
 sample-by-sample one; the sampled points walk the arc's chords."""
 
 from __future__ import annotations
@@ -39,7 +39,7 @@ def test_arc_blocks_within_grbls_limits(pieces, lim, feed_share):
     ops = arc_block_ops(pieces, max(1000, int(cfg.max_feed_um_min * feed_share)), cfg)
     note(f"{cfg!r} arcs {sum(op[0] == 'arc' for op in ops)}")
     r = compare(ops, cfg)
-    for key in ("junction", "accel", "nominal"):
+    for key in ("junction", "accel", "arc_cap"):
         assert r[key].size == 0 or r[key].max() <= 1.0 + 1e-12, (key, r[key].max())
 
 
