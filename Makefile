@@ -61,6 +61,8 @@ bench: setup toolchains
 	$(PYTHON) -m nnik run datasets/corexy_nonlinear.toml > /dev/null && $(PYTHON) -m nnik.bench.builds build/galvo_cba2012 build/corexy_nonlinear
 	$(PYTHON) -m nnik.bench.plan_ram build/galvo_cba2012 build/corexy_nonlinear
 	$(PYTHON) -m nnik.bench.plan_push && $(PYTHON) -m nnik.bench.plan_push --scenario galvo_cba2012
+	$(PYTHON) -m nnik.bench.arc_blocks
+	$(PYTHON) -m nnik.bench.arc_chord_cost
 	$(PYTHON) -m nnik.bench.sample_profile build/galvo_cba2012 datasets/jobs/circle.gcode
 	$(PYTHON) -m nnik.bench.mlp_cost sweep
 	$(PYTHON) -m nnik.bench.estimator

@@ -24,8 +24,11 @@ about 1 um per sample^2).
   in a stop advances only the distance left, d <= c; the step down from d to rest is counted too.
 * Job time: samples * (1 / sample_hz) against the float plan's trapezoid times.
 
+* Arc cap: the speed of each sample that starts in an arc block against the float arc's cap (its
+  centripetal limit and every inner vertex's grbl limit, nnik.bench.planner_oracle; the feed aside).
+
 Ratios: junction = integer / float limit (a float limit of 0 with an integer stop is 0), accel
-= integer change / block acceleration, time = integer / float.
+= integer change / block acceleration, arc_cap = speed / the arc's float cap, time = integer / float.
 """
 
 from __future__ import annotations
@@ -35,7 +38,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from nnik.bench import planner_oracle as oracle
-from nnik.firmware.gcode.planner import Planner
+from nnik.firmware.gcode.planner import Planner, push_arc_op
 
 
 @dataclass
@@ -76,6 +79,11 @@ def replay(ops: list[tuple], cfg) -> Measured:
             pl.push(op[1], op[2], op[3], op[4], op[5])
             if len(pl.q) > n:
                 lens[op[5]] = pl.q[-1].l16
+        elif op[0] == "arc":
+            while pl.ready(False):
+                sample()
+            push_arc_op(pl, op)
+            lens[op[5]] = pl.q[-1].l16
         else:
             while pl.ready(True):
                 sample()
@@ -113,6 +121,8 @@ def compare(ops: list[tuple], cfg, lookahead: int | None = -1) -> dict:
         else:
             prev = d
     t_int = len(m.speed) / hz
+    arc_cap = [c * to_um_s / blocks[h].cap for c, h in zip(m.speed, m.head) if blocks[h].cap < np.inf]
     return {"junction": np.asarray(junction, dtype=float), "accel": np.asarray(accel, dtype=float),
+            "arc_cap": np.asarray(arc_cap, dtype=float),
             "time_int_s": t_int, "time_float_s": fp.time_s,
             "time_ratio": t_int / fp.time_s if fp.time_s > 0 else 1.0}

@@ -24,7 +24,12 @@ nnik.firmware.gcode.planner). It takes the interpreter's operations and the same
   executed is planned with the N - 1 blocks queued behind it, the last of them ending at rest
   (the firmware samples its head block only when the queue is full, so this is exactly its
   lookahead); lookahead=None plans to the next stop (unlimited);
-* a flush (M400, a dwell, a tool change, the end) ends the motion at rest: no junction across it.
+* a flush (M400, a dwell, a tool change, the end) ends the motion at rest: no junction across it;
+* an arc operation (nnik.firmware.gcode.planner_arc) is one block: its length the sum of its
+  chords' exact lengths, entry and exit along its first and last chord, acceleration
+  amin / sqrt(2) (amin the least axis limit), nominal speed min(F, sqrt(amin r / sqrt(2)), grbl's
+  junction limit at every vertex between its chords): the arc's centripetal limit, and no vertex
+  inside passed faster than grbl's rule allows there.
 
 Speeds are um/s, accelerations um/s^2, times s.
 """
@@ -46,6 +51,8 @@ class FBlock:
     vn: float  # um/s
     acc: float  # um/s^2
     entry_max: float = 0.0  # the junction limit with the block before (0: from rest)
+    u_out: tuple[float, float] | None = None  # an arc's last chord's direction (None: u)
+    cap: float = math.inf  # an arc's speed limit, the feed's aside: centripetal and its vertices'
 
 
 @dataclass
@@ -99,27 +106,48 @@ def blocks_of(ops: list[tuple], cfg) -> list[list[FBlock]]:
     accel = tuple(float(a) for a in cfg.accel_um_s2)
     runs, cur, last = [], [], (0, 0)
     for op in ops:
-        if op[0] != "push":
+        if op[0] not in ("push", "arc"):
             if cur:
                 runs.append(cur)
             cur = []
             continue
-        dx, dy = op[1] - last[0], op[2] - last[1]
-        if not dx and not dy:
-            continue
-        L = math.hypot(dx, dy)
-        u = (dx / L, dy / L)
-        mv, ma = motor_limit(cfg, u)
-        vn = min(op[3] / 60.0, cfg.max_feed_um_min / 60.0, mv)
-        b = FBlock(op[5], L, u, vn, min(axis_limit(accel, u), ma))
+        vn = min(op[3], cfg.max_feed_um_min) / 60.0
+        if op[0] == "arc":  # arc blocks are a study of the model (no motor limits with them)
+            b = arc_block(last, op, vn, accel, float(cfg.junction_dev_um))
+        else:
+            dx, dy = op[1] - last[0], op[2] - last[1]
+            if not dx and not dy:
+                continue
+            L = math.hypot(dx, dy)
+            u = (dx / L, dy / L)
+            mv, ma = motor_limit(cfg, u)
+            b = FBlock(op[5], L, u, min(vn, mv), min(axis_limit(accel, u), ma))
         if cur:
             p = cur[-1]
-            b.entry_max = junction_limit(p.u, u, p.vn, vn, accel, float(cfg.junction_dev_um))
+            b.entry_max = junction_limit(p.u if p.u_out is None else p.u_out, b.u, p.vn, b.vn, accel,
+                                         float(cfg.junction_dev_um))
         cur.append(b)
         last = (op[1], op[2])
     if cur:
         runs.append(cur)
     return runs
+
+
+def arc_block(last, op: tuple, vn: float, accel: tuple[float, float], dev_um: float) -> FBlock:
+    """The float block of an ("arc", x, y, feed, tool, index, points, r) operation."""
+    us, L, p = [], 0.0, last
+    for q in op[6]:
+        dx, dy = q[0] - p[0], q[1] - p[1]
+        if dx or dy:
+            n = math.hypot(dx, dy)
+            us.append((dx / n, dy / n))
+            L += n
+            p = q
+    a = min(accel) / math.sqrt(2.0)
+    cap = math.sqrt(a * op[7])
+    for k in range(1, len(us)):
+        cap = min(cap, junction_limit(us[k - 1], us[k], math.inf, math.inf, accel, dev_um))
+    return FBlock(op[5], L, us[0], min(vn, cap), a, u_out=us[-1], cap=cap)
 
 
 def block_time(L: float, v0: float, v1: float, vn: float, a: float) -> float:

@@ -6,11 +6,15 @@ from __future__ import annotations
 
 import math
 
+from nnik.firmware.gcode.planner import Planner, length_q
+from nnik.firmware.gcode.planner_arc import as_arc_op
 
-def path_ops(pieces: list[tuple], feed_um_min: int, start_deg: float = 0.0) -> list[tuple]:
+
+def path_ops(pieces: list[tuple], feed_um_min: int, start_deg: float = 0.0, arcs: list | None = None) -> list[tuple]:
     """pieces: ("line", length_um, turn_deg) turns the heading by turn_deg then goes straight;
     ("arc", radius_um, sweep_deg, chord_um) follows an arc (left for a positive sweep) tangent to
-    the heading, in chords of about chord_um; ("rev", length_um) goes back the way it came."""
+    the heading, in chords of about chord_um; ("rev", length_um) goes back the way it came.
+    arcs (a list) gets (first op, end op, radius um) of each arc piece."""
     x = y = 0.0
     h = math.radians(start_deg)
     pts = []
@@ -30,6 +34,8 @@ def path_ops(pieces: list[tuple], feed_um_min: int, start_deg: float = 0.0) -> l
             a0 = math.atan2(y - cy, x - cx)
             total = math.radians(abs(sweep))
             n = max(1, round(total * r / chord))
+            if arcs is not None:
+                arcs.append((len(pts), len(pts) + n, int(r)))
             for k in range(1, n + 1):
                 a = a0 + side * total * k / n
                 pts.append((cx + r * math.cos(a), cy + r * math.sin(a)))
@@ -37,6 +43,17 @@ def path_ops(pieces: list[tuple], feed_um_min: int, start_deg: float = 0.0) -> l
             h += side * total
     ops = [("push", int(round(px)), int(round(py)), feed_um_min, 0, i) for i, (px, py) in enumerate(pts)]
     return ops + [("flush",)]
+
+
+def arc_block_ops(pieces: list[tuple], feed_um_min: int, cfg) -> list[tuple]:
+    """path_ops with each arc piece as one arc operation where planner_arc makes it one block
+    (cfg's limits), else its chords."""
+    spans: list = []
+    ops = path_ops(pieces, feed_um_min, arcs=spans)
+    vertex = Planner(cfg).vertex
+    for k0, k1, r in reversed(spans):
+        as_arc_op(ops, k0, r, cfg.acc_q16, length_q, vertex, k1)
+    return ops
 
 
 def chord_ops(chord_um: float, radius_um: float, turns: float, feed_um_min: int) -> list[tuple]:

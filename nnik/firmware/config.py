@@ -63,6 +63,9 @@ class MachineConfig:
     # the planner's lookahead queue; 0: the deepest the chip's RAM holds (ranges.plan_blocks_for: 16
     # on the Mega, on the Uno what leaves 256 B for the stack beside the shaper): read cfg.lookahead
     plan_blocks: int = 0
+    # an arc (G2/G3 in G17) planned as one block, cut into chords by the sampler
+    # (nnik.firmware.gcode.planner_arc); the chip does not do it yet: False for every export
+    arc_blocks: bool = False
     mcu: str = "atmega328p"  # the chip the firmware is built for (avr-gcc's -mmcu)
     rule: str = ""  # the tool rule (RULES); "" = the tool's default: s for a laser, else z
     marlin: bool = False  # G4 P in ms, Marlin's setup G codes noted, E words read

@@ -17,6 +17,8 @@ from nnik.firmware.gcode.codes import GcodeAlarm, GcodeLineError, describe
 from nnik.firmware.gcode import curves
 from nnik.firmware.gcode.geometry import chord_length
 from nnik.firmware.gcode.parse import Block, parse_block
+from nnik.firmware.gcode.planner import Planner, length_q
+from nnik.firmware.gcode.planner_arc import as_arc_op
 from nnik.firmware.gcode.program import MIN_FEED, POS_LIMIT, TOOL_SCALED, Move, Plan
 from nnik.firmware.gcode.reader import DOLLAR, EMPTY, ERROR, read_line, sendable
 
@@ -390,7 +392,7 @@ class Interpreter:
         feed = self.feed
         if inv_f:
             feed = self._inverse_feed(chord_length([p[:2] for p in pts3], start), inv_f)
-        first = len(self.plan.ends)
+        first, k0 = len(self.plan.ends), len(self.plan.ops)
         if kind == "arc2d":
             self.mp[2] = tgt[2]  # a helix: Z (the tool's axis) at its end from the start
         self.tool = self.move_tool(False, extrude)
@@ -408,6 +410,9 @@ class Interpreter:
             if kind == "arc2d":
                 c, r, ccw = extra
                 s = self.cfg.scale_q16
+                if self.cfg.arc_blocks and self.plane == 0:  # one planner block (planner_arc)
+                    as_arc_op(self.plan.ops, k0, r * s // SCALE_ONE, self.cfg.acc_q16, length_q,
+                              Planner(self.cfg).vertex)
                 self.plan.moves.append(Move(self.line_no, "arc", self.xf(start), self.xf(tgt), first, n, self.xf(c),
                                   r * s // SCALE_ONE, ccw))
             else:

@@ -2,7 +2,8 @@
 codegen/arduino/src/nnik_plan.c (its header states every rule and rounding; in short):
 
 * units: um (machine frame less the work origin), speeds Q16 um/sample, accelerations Q16
-  um/sample^2, unit vectors Q30; a block is a line or an arc chord;
+  um/sample^2, unit vectors Q30; a block is a line or an arc chord (or, with
+  MachineConfig.arc_blocks, a whole arc: nnik.firmware.gcode.planner_arc, not on the chip yet);
 * lookahead: grbl 1.1's junction deviation (the junction vector's axis limit) at each junction,
   rounded downward, a backward pass for the exit speeds (braking by the least acceleration of the
   block and of the blocks a sample may start in and land in it from), the last queued block
@@ -26,6 +27,7 @@ from math import isqrt
 import numpy as np
 
 from nnik.firmware.config import MachineConfig
+from nnik.firmware.gcode.planner_arc import Chords, arc_chords, arc_point
 from nnik.firmware.gcode.tool_shaper import stream_duty
 
 Q30 = 1 << 30
@@ -45,6 +47,8 @@ class Block:
     lfr: int = 0  # the length's fraction, Q16: the length is len + lfr / 65536 um (floor)
     jmax: int = 0
     exit: int = 0
+    u_out: tuple[int, int] | None = None  # an arc block's last chord's u (planner_arc); None: u
+    chords: Chords | None = None  # an arc block's chords (planner_arc); None: a line
 
     @property
     def l16(self) -> int:
@@ -72,13 +76,14 @@ def length_q(dx: int, dy: int) -> tuple[int, int, int]:
 def junction2(a: Block, b: Block, cfg: MachineConfig) -> int:
     """The square of the speed limit at the junction a -> b, Q16, before the feeds' cap (U32:
     straight on; nnik_plan.c junction2())."""
-    dot = ((a.u[0] * b.u[0] + a.u[1] * b.u[1]) >> 30) - DOT_MARGIN
+    au = a.u if a.u_out is None else a.u_out  # an arc leaves along its last chord
+    dot = ((au[0] * b.u[0] + au[1] * b.u[1]) >> 30) - DOT_MARGIN
     if dot <= -Q30 + REVERSAL:
         return 0  # a reversal
     if dot >= Q30 - REVERSAL:
         return U32  # straight on: the feeds'
     sn = isqrt((Q30 + dot) << 1)  # sin(theta / 2), Q16
-    w = [abs(b.u[i] - a.u[i]) for i in range(2)]
+    w = [abs(b.u[i] - au[i]) for i in range(2)]
     hi, k = [c + 4 for c in w], 0
     while max(hi) >= 0x8000:  # to 15 bits, halving, rounded up
         hi, k = [(c + 1) >> 1 for c in hi], k + 1
@@ -157,12 +162,34 @@ class Planner:
         vn, acc = motor_caps(self.cfg, dx, dy, Lq, Lc, f, vn, acc) if self.cfg.motor_rows else (vn, acc)
         u = tuple((abs(d) << (30 + f)) // Lc * (-1 if d < 0 else 1) for d in (dx, dy))
         lfr = (Lq >> (f - 16) if f >= 16 else Lq << (16 - f)) & 0xFFFF
-        b = Block((x, y), u, Lq >> f, vn, acc, tool, index, lfr)
+        self._queue(Block((x, y), u, Lq >> f, vn, acc, tool, index, lfr))
+
+    def _queue(self, b: Block) -> None:
+        """The block at the queue's end: its junction with the one before, the backward pass."""
         if self.q:
             self.q[-1].jmax = junction(self.q[-1], b, self.cfg)
         self.q.append(b)
-        self.last = (x, y)
+        self.last = b.end
         self._backward()
+
+    def vertex(self, u1: tuple[int, int], u2: tuple[int, int]) -> int:
+        """The junction limit between two chords with unit vectors u1, u2 (planner_arc), without
+        the feeds' cap."""
+        a, b = (Block((0, 0), u, 0, U32, 0, 0, 0) for u in (u1, u2))
+        return junction(a, b, self.cfg)
+
+    def push_arc(self, pts, r: int, feed: int, tool: int, index: int) -> bool:
+        """An arc from the last point through the chord ends pts (radius r um) as one block
+        (planner_arc's rules); False (nothing queued) where planner_arc keeps it chords."""
+        got = arc_chords(self.last, pts, r, self.acc, length_q, self.vertex)
+        if got is None:
+            return False
+        ch, acc, vcap = got
+        l16 = ch.s0[-1] + ch.l16[-1]
+        vn = min((min(feed, self.cfg.max_feed_um_min) << 16) // (60 * self.cfg.sample_hz), vcap)
+        self._queue(Block(tuple(pts[-1]), ch.u[0], l16 >> 16, vn, acc, tool, index, l16 & 0xFFFF,
+                          u_out=ch.u[-1], chords=ch))
+        return True
 
     def _backward(self) -> None:
         q = self.q
@@ -236,10 +263,19 @@ class Planner:
         self.v, self.s = c, s
         if stop:
             p = b.end
+        elif b.chords is not None:
+            p = arc_point(b.chords, s)
         else:
             su = s >> 16
             p = (self.start[0] + ((b.u[0] * su) >> 30), self.start[1] + ((b.u[1] * su) >> 30))
         return p, used, b.vn, b.tool, b.index
+
+
+def push_arc_op(pl: Planner, op: tuple) -> None:
+    """("arc", x, y, feed, tool, index, points, r): the interpreter emits it only for an arc
+    that planner_arc makes one block."""
+    if not pl.push_arc(op[6], op[7], op[3], op[4], op[5]):
+        raise ValueError("an arc operation that planner_arc keeps as chords")
 
 
 class Shaper:
@@ -317,6 +353,10 @@ def run_ops_reference(ops: list[tuple], cfg: MachineConfig) -> Stream:
             while pl.ready(False):
                 sample()
             pl.push(op[1], op[2], op[3], op[4], op[5])
+        elif op[0] == "arc":
+            while pl.ready(False):
+                sample()
+            push_arc_op(pl, op)
         elif op[0] == "flush":
             flush()
         else:

@@ -21,7 +21,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from nnik.firmware.config import MachineConfig
-from nnik.firmware.gcode.planner import U32, Planner, Stream
+from nnik.firmware.gcode.planner import U32, Planner, Stream, push_arc_op
+from nnik.firmware.gcode.planner_arc import arc_point
 
 BULK_MIN = 8  # cruise runs at least this long go through numpy
 
@@ -70,6 +71,7 @@ def _drain(pl: Planner, flushing: bool, X: list, Y: list, V: list, B: list, stop
         L16, vn, acc, ex, idx = b.l16, b.vn, b.acc, b.exit, b.index
         ux, uy = b.u
         sx, sy = pl.start
+        arc = b.chords  # an arc block: its points along its chords (planner_arc)
         while True:
             rem = L16 - s
             if v < vn:
@@ -81,7 +83,7 @@ def _drain(pl: Planner, flushing: bool, X: list, Y: list, V: list, B: list, stop
             else:
                 c = v
                 most = (rem - 1) // c if c else 0  # samples at c that stay inside the block
-                if most >= BULK_MIN and _brakes(c, rem, ex, acc):
+                if most >= BULK_MIN and arc is None and _brakes(c, rem, ex, acc):
                     k = _cruise_len(c, rem, ex, acc, most)
                     su = (s + c * np.arange(1, k + 1, dtype=np.int64)) >> 16
                     X.extend((sx + ((ux * su) >> 30)).tolist())
@@ -111,8 +113,13 @@ def _drain(pl: Planner, flushing: bool, X: list, Y: list, V: list, B: list, stop
             s += c
             if s < L16:
                 su = s >> 16
-                X.append(sx + ((ux * su) >> 30))
-                Y.append(sy + ((uy * su) >> 30))
+                if arc is not None:
+                    px, py = arc_point(arc, s)
+                    X.append(px)
+                    Y.append(py)
+                else:
+                    X.append(sx + ((ux * su) >> 30))
+                    Y.append(sy + ((uy * su) >> 30))
                 V.append(c)
                 B.append(idx)
                 v = c
@@ -132,6 +139,10 @@ def _drain(pl: Planner, flushing: bool, X: list, Y: list, V: list, B: list, stop
             if stop:
                 X.append(b.end[0])
                 Y.append(b.end[1])
+            elif b.chords is not None:
+                px, py = arc_point(b.chords, s)
+                X.append(px)
+                Y.append(py)
             else:
                 su = s >> 16
                 X.append(pl.start[0] + ((b.u[0] * su) >> 30))
@@ -191,6 +202,12 @@ def run_arrays(ops: list[tuple], cfg: MachineConfig) -> Arrays:
             vn_of[op[5]] = (min(op[3], cfg.max_feed_um_min) << 16) // (60 * cfg.sample_hz)
             tool_of[op[5]] = op[4]
             pl.push(op[1], op[2], op[3], op[4], op[5])
+        elif op[0] == "arc":
+            if len(pl.q) == pl.n:
+                _drain(pl, False, X, Y, V, B, stops)
+            push_arc_op(pl, op)
+            vn_of[op[5]] = pl.q[-1].vn  # the arc's capped nominal speed
+            tool_of[op[5]] = op[4]
         elif op[0] == "flush":
             flush()
         else:
