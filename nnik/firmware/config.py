@@ -172,6 +172,8 @@ class MachineConfig:
         for key, problem in ranges.motion_problems(self.accel_um_s2, self.junction_dev_um, self.max_feed_um_min,
                                                    self.sample_hz):
             raise ValueError(f"[motion] {key}: {problem}")
+        if self.arc_blocks and self.motor_rows:
+            raise ValueError("arc blocks (a study of the model) do not apply motor limits: not both")
         if self.shaper.count("/") > 1 or any(k not in SHAPER_KINDS for k in self.shaper.split("/")):
             raise ValueError(f"shaper must be one of {', '.join(SHAPER_KINDS)}, or X/Y: one per axis")
         if (self.shaper == "none") != (not self.shaper_taps):
