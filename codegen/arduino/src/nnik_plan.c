@@ -292,25 +292,53 @@ static uint16_t shr9(uint32_t t)
     return (uint16_t)(((uint16_t)(t >> 16) << 7) | ((uint16_t)t >> 9));
 }
 
-/* after moving c this sample (rem > c left), can the block still brake to its exit speed?
- * d = floor((rem - c) / 65536) by 32-bit pieces. */
+/* after moving c this sample (rem > c left), can the block still brake to its exit e?  Toward
+ * a stop (e = 0: the sampler lands on the end at most at acc, lands()) by its own steps c - acc,
+ * c - 2 acc, ..., which need at most ((c - acc) c + acc^2 / 4) / (2 acc) (equal at c = k acc, a
+ * convex bound between); toward a junction e > 0 by the continuous (c^2 - e^2) / (2 acc).  So it
+ * can when c <= e (c <= acc toward a stop), or when D = rem - c (Q16 um) holds 2 acc D >= N,
+ * N = (c - acc) c + acc^2 / 4 or c^2 - e^2, rounded up as 2^18 P: P = xq yq + ceil(aq^2 / 4)
+ * with xq = ceil((c - acc) / 512), yq = ceil(c / 512), aq = ceil(acc / 512), or
+ * ceil(c / 512)^2 - floor(e / 512)^2.  The left side is rounded down: from d = floor(D / 65536)
+ * (whole um) when d >= 256 (it passes when d > dbig), else from D8 = floor(D / 256), acc as it is
+ * when below 2^16, else floor(acc / 128): each a 32-bit product shifted down against P. */
 static uint8_t can_brake(uint32_t c, uint32_t r_um, uint16_t r_fr, const nnik_pl_block_t *b)
 {
-    uint32_t d, cq, eq, ch = c >> 16;
-    if (c <= b->exit)
+    uint32_t d, p, ch = c >> 16;
+    uint16_t cq, d8;
+    if (c <= b->exit || (!b->exit && c <= b->acc))
         return 1;
     if ((uint16_t)c > r_fr)
         ch++;
     d = r_um - ch;
-    if (d > b->dbig) /* 2 acc d > 2^32 - 1 > any 4 ceil(c / 512)^2 */
+    if (d > b->dbig) /* 2 acc D > 2^32 2^16 > any N */
         return 1;
-    cq = shr9(c + 511); /* <= 2^15 */
-    eq = shr9(b->exit);
-    return 2 * b->acc * d >= 4 * (nnik_mul16((uint16_t)cq, (uint16_t)cq) - nnik_mul16((uint16_t)eq, (uint16_t)eq));
+    cq = shr9(c + 511); /* c < 2^24: <= 2^15 */
+    if (b->exit) {
+        uint16_t eq = shr9(b->exit);
+        p = nnik_mul16(cq, cq) - nnik_mul16(eq, eq);
+    } else {
+        uint16_t aq = shr9(b->acc + 511); /* acc < 2^23: <= 2^14 */
+        p = nnik_mul16(shr9(c - b->acc + 511), cq) + ((nnik_mul16(aq, aq) + 3) >> 2);
+    }
+    if (d >= 256)
+        return ((b->acc * d) >> 1) >= p; /* acc d < 2^32 below dbig */
+    d8 = (uint16_t)((d << 8) | ((uint16_t)(r_fr - (uint16_t)c) >> 8)); /* D < 2^24 */
+    if (b->acc < 0x10000UL)
+        return (nnik_mul16((uint16_t)b->acc, d8) >> 9) >= p;
+    return (nnik_mul16((uint16_t)(b->acc >> 7), d8) >> 2) >= p; /* acc < 2^23 */
 }
 
-/* may the sample go at c?  Each block end it reaches it passes at most at that block's exit
- * (never a stop's), and the block it ends in can still brake to its exit. */
+/* a sample that reaches a stop's end (rem_q <= c left to it, Q16) lands on it when the step down
+ * to rest and the step from v to rem_q are each within an acceleration: rem_q <= the stop block's
+ * acc and v - rem_q <= the head block's acc. */
+static uint8_t lands(const nnik_plan_t *pl, const nnik_pl_block_t *b, uint32_t rem_q)
+{
+    return rem_q <= b->acc && pl->v <= rem_q + pl->q[pl->head].acc;
+}
+
+/* may the sample go at c?  Each block end it reaches it passes at most at that block's exit, or
+ * lands on it when it is a stop (lands()), and the block it ends in can still brake to its exit. */
 static uint8_t can_go(const nnik_plan_t *pl, uint32_t c)
 {
     const nnik_pl_block_t *b = &pl->q[pl->head];
@@ -320,7 +348,7 @@ static uint8_t can_go(const nnik_plan_t *pl, uint32_t c)
     while (reaches(c, r_um, r_fr)) {
         uint32_t rem;
         if (c > b->exit)
-            return 0;
+            return !b->exit && lands(pl, b, (r_um << 16) + r_fr); /* rem <= c < 2^24 */
         b = &pl->q[IDX(pl, ++k)]; /* exit > 0: b is not the last block */
         rem = (r_um << 16) + r_fr + b->lfr; /* rem <= c < 2^24 */
         r_fr = (uint16_t)rem;

@@ -169,23 +169,41 @@ class Planner:
 
     @staticmethod
     def _can_brake(c: int, rem: int, ve: int, acc: int) -> bool:
-        if c <= ve:
+        """nnik_plan.c can_brake: c <= ve (toward a stop, ve = 0: c <= acc), or 2 acc (rem - c) >=
+        (c - acc) c + acc^2 / 4 toward a stop (the sampler's own steps down, then it lands), c^2 -
+        ve^2 toward a junction, rounded against it (whole um at 256 um and beyond, 1/256 um below)."""
+        if c <= ve or (not ve and c <= acc):
             return True
         if rem <= c:
             return False
         d = (rem - c) >> 16
         if d > U32 // (2 * acc):
             return True
-        cq, eq = (c + 511) >> 9, ve >> 9
-        return 2 * acc * d >= 4 * (cq * cq - eq * eq)
+        aq = (acc + 511) >> 9
+        if ve:
+            cq, eq = (c + 511) >> 9, ve >> 9
+            p = cq * cq - eq * eq
+        else:
+            p = ((c - acc + 511) >> 9) * ((c + 511) >> 9) + ((aq * aq + 3) >> 2)
+        if d >= 256:
+            return (acc * d) >> 1 >= p
+        d8 = (rem - c) >> 8
+        return (acc * d8) >> 9 >= p if acc < 0x10000 else ((acc >> 7) * d8) >> 2 >= p
 
-    def can_go(self, c: int, rem: int) -> bool:
+    @staticmethod
+    def lands(rem: int, v: int, stop_acc: int, head_acc: int) -> bool:
+        """nnik_plan.c lands: a sample reaching a stop's end rem (Q16) away lands on it when
+        rem <= the stop block's acc and v - rem <= the head block's acc."""
+        return rem <= stop_acc and v <= rem + head_acc
+
+    def can_go(self, c: int, rem: int, v: int | None = None) -> bool:
         """nnik_plan.c can_go: each block end the sample reaches (rem <= c) it passes at most at
-        that block's exit (never a stop's), and the block it ends in can still brake."""
+        that block's exit, or lands on it when it is a stop (lands; v: the speed before, self.v
+        when None), and the block it ends in can still brake."""
         q, k = self.q, 0
         while rem <= c:
             if c > q[k].exit:
-                return False
+                return not q[k].exit and self.lands(rem, self.v if v is None else v, q[k].acc, q[0].acc)
             k += 1
             rem += q[k].l16
         return self._can_brake(c, rem, q[k].exit, q[k].acc)

@@ -93,19 +93,14 @@ def _drain(pl: Planner, flushing: bool, X: list, Y: list, V: list, B: list, stop
             # the brake test (Planner.can_go; inline while the sample stays in its block), then
             # hold, then the floor
             if rem <= c:
-                ok = pl.can_go(c, rem)
+                ok = pl.can_go(c, rem, v)
             else:
-                ok = True
-                if c > ex:
-                    d = (rem - c) >> 16
-                    if d <= U32 // (2 * acc):
-                        cq, eq = (c + 511) >> 9, ex >> 9
-                        ok = 2 * acc * d >= 4 * (cq * cq - eq * eq)
+                ok = c <= ex or _brakes(c, rem, ex, acc)
             if not ok:
                 c = v if v < vn else vn
-                if not c or not pl.can_go(c, rem):
+                if not c or not pl.can_go(c, rem, v):
                     c = v - acc if v > acc else 0
-                    if c < ex < v and pl.can_go(ex, rem):
+                    if c < ex < v and pl.can_go(ex, rem, v):
                         c = ex
                     c = max(c, acc >> 2, 1)
             s += c
