@@ -383,8 +383,11 @@ void nnik_pl_sample(nnik_plan_t *pl, nnik_pl_sample_t *out)
     else
         c = v;
     if (!can_go(pl, c)) {
+        uint32_t up = c;
         c = v < b->vn ? v : b->vn; /* hold (not at rest: the sample must move) */
-        if (!c || !can_go(pl, c)) {
+        if (v < b->exit && b->exit < up && can_go(pl, b->exit))
+            c = b->exit; /* up to the exit if it may go at it */
+        else if (!c || !can_go(pl, c)) {
             fl = b->acc >> 2;
             if (fl < 1)
                 fl = 1;
