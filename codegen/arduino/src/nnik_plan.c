@@ -293,40 +293,34 @@ static uint16_t shr9(uint32_t t)
 }
 
 /* after moving c this sample (rem > c left), can the block still brake to its exit e?  Toward
- * a stop (e = 0: the sampler lands on the end at most at acc, lands()) by its own steps c - acc,
- * c - 2 acc, ..., which need at most ((c - acc) c + acc^2 / 4) / (2 acc) (equal at c = k acc, a
- * convex bound between); toward a junction e > 0 by the continuous (c^2 - e^2) / (2 acc).  So it
- * can when c <= e (c <= acc toward a stop), or when D = rem - c (Q16 um) holds 2 acc D >= N,
- * N = (c - acc) c + acc^2 / 4 or c^2 - e^2, rounded up as 2^18 P: P = xq yq + ceil(aq^2 / 4)
- * with xq = ceil((c - acc) / 512), yq = ceil(c / 512), aq = ceil(acc / 512), or
- * ceil(c / 512)^2 - floor(e / 512)^2.  The left side is rounded down: from d = floor(D / 65536)
- * (whole um) when d >= 256 (it passes when d > dbig), else from D8 = floor(D / 256), acc as it is
- * when below 2^16, else floor(acc / 128): each a 32-bit product shifted down against P. */
+ * a junction (e > 0) by the continuous need (c^2 - e^2) / (2 acc); toward a stop (e = 0: the
+ * sampler lands on the end at most at acc, lands()) by its own steps c - acc, c - 2 acc, ...,
+ * which need at most (c - acc / 2)^2 / (2 acc) (equal at c = k acc, a convex bound between).  So
+ * it can when c <= e (c <= acc toward a stop), or when D = rem - c (Q16 um) holds
+ * 2 acc D >= x^2 - e^2, x = c (c - floor(acc / 2) toward a stop), rounded up as 2^18 P,
+ * P = ceil(x / 512)^2 - floor(e / 512)^2, and D rounded down: from d = floor(D / 65536) (whole
+ * um) it passes when d > dbig, else when d >= 256 it needs floor(acc d / 2) >= P, else from
+ * D8 = floor(D / 256) floor(floor(acc / 128) D8 / 4) >= P (a 16-bit product). */
 static uint8_t can_brake(uint32_t c, uint32_t r_um, uint16_t r_fr, const nnik_pl_block_t *b)
 {
-    uint32_t d, p, ch = c >> 16;
-    uint16_t cq, d8;
+    uint32_t d, p, ch = c >> 16, x = c;
+    uint16_t cq, eq;
     if (c <= b->exit || (!b->exit && c <= b->acc))
         return 1;
     if ((uint16_t)c > r_fr)
         ch++;
     d = r_um - ch;
-    if (d > b->dbig) /* 2 acc D > 2^32 2^16 > any N */
+    if (d > b->dbig) /* 2 acc d > 2^32 - 1 > any 4 P */
         return 1;
-    cq = shr9(c + 511); /* c < 2^24: <= 2^15 */
-    if (b->exit) {
-        uint16_t eq = shr9(b->exit);
-        p = nnik_mul16(cq, cq) - nnik_mul16(eq, eq);
-    } else {
-        uint16_t aq = shr9(b->acc + 511); /* acc < 2^23: <= 2^14 */
-        p = nnik_mul16(shr9(c - b->acc + 511), cq) + ((nnik_mul16(aq, aq) + 3) >> 2);
-    }
+    if (!b->exit)
+        x -= b->acc >> 1;
+    cq = shr9(x + 511); /* < 2^24: <= 2^15 */
+    eq = shr9(b->exit);
+    p = nnik_mul16(cq, cq) - nnik_mul16(eq, eq);
     if (d >= 256)
         return ((b->acc * d) >> 1) >= p; /* acc d < 2^32 below dbig */
-    d8 = (uint16_t)((d << 8) | ((uint16_t)(r_fr - (uint16_t)c) >> 8)); /* D < 2^24 */
-    if (b->acc < 0x10000UL)
-        return (nnik_mul16((uint16_t)b->acc, d8) >> 9) >= p;
-    return (nnik_mul16((uint16_t)(b->acc >> 7), d8) >> 2) >= p; /* acc < 2^23 */
+    /* D < 2^24: D8 < 2^16; acc < 2^23: acc / 128 < 2^16 */
+    return (nnik_mul16((uint16_t)(b->acc >> 7), (uint16_t)((d << 8) | ((uint16_t)(r_fr - (uint16_t)c) >> 8))) >> 2) >= p;
 }
 
 /* a sample that reaches a stop's end (rem_q <= c left to it, Q16) lands on it when the step down

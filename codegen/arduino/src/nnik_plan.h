@@ -52,14 +52,13 @@
  * block's length to rem each time) it passes at most at that block's exit, or, at a stop's end
  * (exit 0), lands on it: the distance left there, rem (Q16), is at most that block's acc and
  * v - rem at most the head block's acc; and the block it ends in can still brake: c <= ve (c <= acc
- * toward a stop), or with D = rem - c (Q16 um) 2 acc D >= N, toward a junction (ve > 0) the
- * continuous N = c^2 - ve^2, toward a stop the sampler's own steps down (c - acc, c - 2 acc, ...,
- * then the landing) N = (c - acc) c + acc^2 / 4, both rounded up as 2^18 P:
- *     P = ceil(c / 512)^2 - floor(ve / 512)^2, or ceil((c - acc) / 512) ceil(c / 512) + ceil(aq^2 / 4),
- *     aq = ceil(acc / 512) (speeds below 2^24, 256 um per sample, so every product fits 32 bits),
- * and D rounded down: with d = floor(D / 65536) (whole um) it passes when d > floor((2^32 - 1) /
- * (2 acc)) (dbig, kept per block), else when d >= 256 it needs floor(acc d / 2) >= P, else with
- * D8 = floor(D / 256) floor(acc D8 / 2^9) >= P (acc < 2^16) or floor(floor(acc / 128) D8 / 4) >= P.
+ * toward a stop), or with D = rem - c (Q16 um) 2 acc D >= x^2 - ve^2, x = c toward a junction
+ * (ve > 0: the continuous need), x = c - floor(acc / 2) toward a stop (the sampler's own steps
+ * down, c - acc, c - 2 acc, ..., then the landing: at most (c - acc / 2)^2 / (2 acc)), the right
+ * side rounded up as 2^18 (ceil(x / 512)^2 - floor(ve / 512)^2) = 2^18 P (speeds below 2^24, 256 um
+ * per sample, so every product fits 32 bits) and D rounded down: with d = floor(D / 65536)
+ * (whole um) it passes when d > floor((2^32 - 1) / (2 acc)) (dbig, kept per block), else when
+ * d >= 256 it needs floor(acc d / 2) >= P, else floor(floor(acc / 128) floor(D / 256) / 4) >= P.
  * Then s += c; at
  * or past the end of a block with exit 0 the sample lands exactly on its end and v = 0 (a stop);
  * past the end of any other block the remainder carries into the next.  The point is

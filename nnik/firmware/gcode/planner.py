@@ -170,8 +170,8 @@ class Planner:
     @staticmethod
     def _can_brake(c: int, rem: int, ve: int, acc: int) -> bool:
         """nnik_plan.c can_brake: c <= ve (toward a stop, ve = 0: c <= acc), or 2 acc (rem - c) >=
-        (c - acc) c + acc^2 / 4 toward a stop (the sampler's own steps down, then it lands), c^2 -
-        ve^2 toward a junction, rounded against it (whole um at 256 um and beyond, 1/256 um below)."""
+        x^2 - ve^2 with x = c toward a junction, c - floor(acc / 2) toward a stop (the sampler's own
+        steps down, then it lands), rounded against it (whole um from 256 um, 1/256 um below)."""
         if c <= ve or (not ve and c <= acc):
             return True
         if rem <= c:
@@ -179,16 +179,11 @@ class Planner:
         d = (rem - c) >> 16
         if d > U32 // (2 * acc):
             return True
-        aq = (acc + 511) >> 9
-        if ve:
-            cq, eq = (c + 511) >> 9, ve >> 9
-            p = cq * cq - eq * eq
-        else:
-            p = ((c - acc + 511) >> 9) * ((c + 511) >> 9) + ((aq * aq + 3) >> 2)
+        cq, eq = (c - (0 if ve else acc >> 1) + 511) >> 9, ve >> 9
+        p = cq * cq - eq * eq
         if d >= 256:
             return (acc * d) >> 1 >= p
-        d8 = (rem - c) >> 8
-        return (acc * d8) >> 9 >= p if acc < 0x10000 else ((acc >> 7) * d8) >> 2 >= p
+        return ((acc >> 7) * ((rem - c) >> 8)) >> 2 >= p
 
     @staticmethod
     def lands(rem: int, v: int, stop_acc: int, head_acc: int) -> bool:
