@@ -74,6 +74,9 @@ struct nnik_gc {
     uint32_t overspeed;   /* samples stretched beyond their ticks: a motor needed more steps */
     uint32_t clamped;     /* segment ends the IK clamped to its domain */
     nnik_plan_t pl;
+    int32_t pend[3];      /* a block held back while the planner is full: X, Y (um), feed (um/min) */
+    uint16_t pend_tool;   /* its tool word */
+    uint8_t pending;      /* 1: pend waits for the head block to be left (its line is answered) */
     nnik_shaper_t sh;
     uint16_t settle;      /* shaper tail samples still owed after the last planner sample */
     uint16_t tail_tool;   /* the tool word of the last planner sample */
@@ -114,6 +117,12 @@ int8_t nnik_gc_line(nnik_gc_t *g, const char *line);
 
 /* The planner runs out to rest and the shaper's tail follows (the end of a job: M400 does it). */
 void nnik_gc_flush(nnik_gc_t *g);
+
+/* A block held back (pending: the planner was full when its line came, and the line is answered
+ * at once so that the sender's next line travels meanwhile): one sample while the planner is
+ * full, else the block goes in.  The planner sees the same pushes and samples in the same order
+ * as without holding back (its samples depend on the blocks alone).  1 if it did either. */
+uint8_t nnik_gc_ahead(nnik_gc_t *g);
 
 /* internal: the words of g->line run (nnik_gc_parse.c -> nnik_gcode.c) */
 int8_t nnik_gc_exec(nnik_gc_t *g);
