@@ -298,9 +298,8 @@ static uint16_t shr9(uint32_t t)
  * which need at most (c - acc / 2)^2 / (2 acc) (equal at c = k acc, a convex bound between).  So
  * it can when c <= e (c <= acc toward a stop), or when D = rem - c (Q16 um) holds
  * 2 acc D >= x^2 - e^2, x = c (c - floor(acc / 2) toward a stop), rounded up as 2^18 P,
- * P = ceil(x / 512)^2 - floor(e / 512)^2, and D rounded down: from d = floor(D / 65536) (whole
- * um) it passes when d > dbig, else when d >= 256 it needs floor(acc d / 2) >= P, else from
- * D8 = floor(D / 256) floor(floor(acc / 128) D8 / 4) >= P (a 16-bit product). */
+ * P = ceil(x / 512)^2 - floor(e / 512)^2, and D rounded down: it passes when d = floor(D / 65536)
+ * (whole um) > dbig, else it needs floor(floor(acc / 32) floor(D / 2048) / 2) >= P. */
 static uint8_t can_brake(uint32_t c, uint32_t r_um, uint16_t r_fr, const nnik_pl_block_t *b)
 {
     uint32_t d, p, ch = c >> 16, x = c;
@@ -317,10 +316,9 @@ static uint8_t can_brake(uint32_t c, uint32_t r_um, uint16_t r_fr, const nnik_pl
     cq = shr9(x + 511); /* < 2^24: <= 2^15 */
     eq = shr9(b->exit);
     p = nnik_mul16(cq, cq) - nnik_mul16(eq, eq);
-    if (d >= 256)
-        return ((b->acc * d) >> 1) >= p; /* acc d < 2^32 below dbig */
-    /* D < 2^24: D8 < 2^16; acc < 2^23: acc / 128 < 2^16 */
-    return (nnik_mul16((uint16_t)(b->acc >> 7), (uint16_t)((d << 8) | ((uint16_t)(r_fr - (uint16_t)c) >> 8))) >> 2) >= p;
+    /* floor(acc / 32) floor(D / 2048) <= acc (d + 1) < 2^31 + 2^23 below dbig (and d << 5 wraps
+     * only when acc < 32: then the product is 0) */
+    return (((b->acc >> 5) * ((d << 5) | ((uint16_t)(r_fr - (uint16_t)c) >> 11))) >> 1) >= p;
 }
 
 /* a sample that reaches a stop's end (rem_q <= c left to it, Q16) lands on it when the step down

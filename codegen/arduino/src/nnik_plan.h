@@ -57,8 +57,8 @@
  * down, c - acc, c - 2 acc, ..., then the landing: at most (c - acc / 2)^2 / (2 acc)), the right
  * side rounded up as 2^18 (ceil(x / 512)^2 - floor(ve / 512)^2) = 2^18 P (speeds below 2^24, 256 um
  * per sample, so every product fits 32 bits) and D rounded down: with d = floor(D / 65536)
- * (whole um) it passes when d > floor((2^32 - 1) / (2 acc)) (dbig, kept per block), else when
- * d >= 256 it needs floor(acc d / 2) >= P, else floor(floor(acc / 128) floor(D / 256) / 4) >= P.
+ * (whole um) it passes when d > floor((2^32 - 1) / (2 acc)) (dbig, kept per block), else it needs
+ * floor(floor(acc / 32) floor(D / 2048) / 2) >= P (D in 1/32 um: a stop's last samples are not held back).
  * Then s += c; at
  * or past the end of a block with exit 0 the sample lands exactly on its end and v = 0 (a stop);
  * past the end of any other block the remainder carries into the next.  The point is

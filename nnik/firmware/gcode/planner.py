@@ -171,7 +171,7 @@ class Planner:
     def _can_brake(c: int, rem: int, ve: int, acc: int) -> bool:
         """nnik_plan.c can_brake: c <= ve (toward a stop, ve = 0: c <= acc), or 2 acc (rem - c) >=
         x^2 - ve^2 with x = c toward a junction, c - floor(acc / 2) toward a stop (the sampler's own
-        steps down, then it lands), rounded against it (whole um from 256 um, 1/256 um below)."""
+        steps down, then it lands), rounded against it (acc / 32, D in 1/32 um)."""
         if c <= ve or (not ve and c <= acc):
             return True
         if rem <= c:
@@ -181,9 +181,7 @@ class Planner:
             return True
         cq, eq = (c - (0 if ve else acc >> 1) + 511) >> 9, ve >> 9
         p = cq * cq - eq * eq
-        if d >= 256:
-            return (acc * d) >> 1 >= p
-        return ((acc >> 7) * ((rem - c) >> 8)) >> 2 >= p
+        return ((acc >> 5) * ((rem - c) >> 11)) >> 1 >= p
 
     @staticmethod
     def lands(rem: int, v: int, stop_acc: int, head_acc: int) -> bool:
