@@ -321,28 +321,22 @@ static uint8_t can_brake(uint32_t c, uint32_t r_um, uint16_t r_fr, const nnik_pl
     return (((b->acc >> 5) * ((d << 5) | ((uint16_t)(r_fr - (uint16_t)c) >> 11))) >> 1) >= p;
 }
 
-/* a sample that reaches a stop's end (rem_q <= c left to it, Q16) lands on it when the step down
- * to rest and the step from v to rem_q are each within an acceleration: rem_q <= the stop block's
- * acc and v - rem_q <= the head block's acc. */
-static uint8_t lands(const nnik_plan_t *pl, const nnik_pl_block_t *b, uint32_t rem_q)
-{
-    return rem_q <= b->acc && pl->v <= rem_q + pl->q[pl->head].acc;
-}
-
 /* may the sample go at c?  Each block end it reaches it passes at most at that block's exit, or
- * lands on it when it is a stop (lands()), and the block it ends in can still brake to its exit. */
+ * lands on it when it is a stop (exit 0): the distance left to it, rem (Q16, <= c), is at most
+ * that block's acc (the step to rest) and v - rem at most the head block's acc (the step from v);
+ * and the block it ends in can still brake to its exit. */
 static uint8_t can_go(const nnik_plan_t *pl, uint32_t c)
 {
     const nnik_pl_block_t *b = &pl->q[pl->head];
-    uint32_t r_um = pl->r_um;
+    uint32_t r_um = pl->r_um, rem, lo = pl->v > b->acc ? pl->v - b->acc : 0;
     uint16_t r_fr = pl->r_fr;
     uint8_t k = 0;
     while (reaches(c, r_um, r_fr)) {
-        uint32_t rem;
+        rem = (r_um << 16) + r_fr; /* rem <= c < 2^24 */
         if (c > b->exit)
-            return !b->exit && lands(pl, b, (r_um << 16) + r_fr); /* rem <= c < 2^24 */
+            return !b->exit && rem <= b->acc && rem >= lo;
         b = &pl->q[IDX(pl, ++k)]; /* exit > 0: b is not the last block */
-        rem = (r_um << 16) + r_fr + b->lfr; /* rem <= c < 2^24 */
+        rem += b->lfr;
         r_fr = (uint16_t)rem;
         r_um = b->len + (rem >> 16);
     }
@@ -375,11 +369,8 @@ void nnik_pl_sample(nnik_plan_t *pl, nnik_pl_sample_t *out)
     else
         c = v;
     if (!can_go(pl, c)) {
-        uint32_t up = c;
         c = v < b->vn ? v : b->vn; /* hold (not at rest: the sample must move) */
-        if (v < b->exit && b->exit < up && can_go(pl, b->exit))
-            c = b->exit; /* up to the exit if it may go at it */
-        else if (!c || !can_go(pl, c)) {
+        if (!c || !can_go(pl, c)) {
             fl = b->acc >> 2;
             if (fl < 1)
                 fl = 1;

@@ -45,8 +45,7 @@
  *
  * Sampling.  The state is the head block, the distance s along it (Q16 um; rem = its length - s)
  * and the speed v.  Each sample takes the first of these speeds that "may go": up = v + acc (at
- * most vn; above vn: v - acc, at least vn), then the exit ve when v < ve < up, then
- * hold = min(v, vn) (not when 0); else
+ * most vn; above vn: v - acc, at least vn), then hold = min(v, vn) (not when 0); else
  * down = v - acc (0 below acc), or the exit ve when v - acc < ve < v and ve may go, and at least
  * max(acc >> 2, 1).  A speed c may go when every block end it reaches (rem <= c, adding the next
  * block's length to rem each time) it passes at most at that block's exit, or, at a stop's end

@@ -213,10 +213,8 @@ class Planner:
         else:
             c = v
         if not self.can_go(c, rem):
-            up, c = c, min(v, b.vn)  # hold (not at rest: the sample must move)
-            if v < b.exit < up and self.can_go(b.exit, rem):
-                c = b.exit  # up to the exit if it may go at it
-            elif not c or not self.can_go(c, rem):
+            c = min(v, b.vn)  # hold (not at rest: the sample must move)
+            if not c or not self.can_go(c, rem):
                 c = v - b.acc if v > b.acc else 0
                 if c < b.exit < v and self.can_go(b.exit, rem):
                     c = b.exit  # down to the exit if it may go at it

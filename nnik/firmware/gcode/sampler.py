@@ -97,10 +97,8 @@ def _drain(pl: Planner, flushing: bool, X: list, Y: list, V: list, B: list, stop
             else:
                 ok = c <= ex or _brakes(c, rem, ex, acc)
             if not ok:
-                up, c = c, (v if v < vn else vn)
-                if v < ex < up and pl.can_go(ex, rem, v):
-                    c = ex  # up to the exit if it may go at it
-                elif not c or not pl.can_go(c, rem, v):
+                c = v if v < vn else vn
+                if not c or not pl.can_go(c, rem, v):
                     c = v - acc if v > acc else 0
                     if c < ex < v and pl.can_go(ex, rem, v):
                         c = ex
