@@ -53,7 +53,7 @@ def test_no_junction_and_no_acceleration_above_grbls_limits(pieces, lim, feed_sh
 
 
 @pytest.mark.xfail(reason="measured 0.99-2.35, median 1.018, on 150 random paths (derandomized; before the sampler could "
-                          "land on a stop: 1.00-3.07, median 1.084); 72 of 150 above 1.02, most with 2-4 blocks at "
+                          "land on a stop: 1.00-3.07, median 1.084); 67 of 150 above 1.02, most with 2-4 blocks at "
                           "500 Hz on 10-90 um chords. What remains: toward a junction (exit > 0) the brake test keeps "
                           "the continuous need (c^2 - e^2) / (2 acc), about half a sample's travel more than the "
                           "sampler's own steps (the tighter discrete bound crossed junction limits: after a crossing "
