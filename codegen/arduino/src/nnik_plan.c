@@ -294,7 +294,7 @@ static uint16_t shr9(uint32_t t)
 
 /* after moving c this sample (rem > c left), can the block still brake to its exit e?  Toward
  * a junction (e > 0) by the continuous need (c^2 - e^2) / (2 acc); toward a stop (e = 0: the
- * sampler lands on the end at most at acc, lands()) by its own steps c - acc, c - 2 acc, ...,
+ * sampler lands on the end at most at acc, can_go) by its own steps c - acc, c - 2 acc, ...,
  * which need at most (c - acc / 2)^2 / (2 acc) (equal at c = k acc, a convex bound between).  So
  * it can when c <= e (c <= acc toward a stop), or when D = rem - c (Q16 um) holds
  * 2 acc D >= x^2 - e^2, x = c (c - floor(acc / 2) toward a stop), rounded up as 2^18 P,
@@ -304,7 +304,7 @@ static uint8_t can_brake(uint32_t c, uint32_t r_um, uint16_t r_fr, const nnik_pl
 {
     uint32_t d, p, ch = c >> 16, x = c;
     uint16_t cq, eq;
-    if (c <= b->exit || (!b->exit && c <= b->acc))
+    if (c <= (b->exit ? b->exit : b->acc))
         return 1;
     if ((uint16_t)c > r_fr)
         ch++;
@@ -322,19 +322,20 @@ static uint8_t can_brake(uint32_t c, uint32_t r_um, uint16_t r_fr, const nnik_pl
 }
 
 /* may the sample go at c?  Each block end it reaches it passes at most at that block's exit, or
- * lands on it when it is a stop (exit 0): the distance left to it, rem (Q16, <= c), is at most
- * that block's acc (the step to rest) and v - rem at most the head block's acc (the step from v);
- * and the block it ends in can still brake to its exit. */
+ * lands on it when it is a stop (exit 0) and the distance left to it, rem (Q16, <= c), is at
+ * most that block's acc (the step to rest; the step from v to rem is within the head block's acc
+ * by the brake test that let v go: (v - acc / 2)^2 / (2 acc) >= v - acc); and the block it ends
+ * in can still brake to its exit. */
 static uint8_t can_go(const nnik_plan_t *pl, uint32_t c)
 {
     const nnik_pl_block_t *b = &pl->q[pl->head];
-    uint32_t r_um = pl->r_um, rem, lo = pl->v > b->acc ? pl->v - b->acc : 0;
+    uint32_t r_um = pl->r_um, rem;
     uint16_t r_fr = pl->r_fr;
     uint8_t k = 0;
     while (reaches(c, r_um, r_fr)) {
         rem = (r_um << 16) + r_fr; /* rem <= c < 2^24 */
         if (c > b->exit)
-            return !b->exit && rem <= b->acc && rem >= lo;
+            return !b->exit && rem <= b->acc;
         b = &pl->q[IDX(pl, ++k)]; /* exit > 0: b is not the last block */
         rem += b->lfr;
         r_fr = (uint16_t)rem;

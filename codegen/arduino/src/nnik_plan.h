@@ -49,8 +49,8 @@
  * down = v - acc (0 below acc), or the exit ve when v - acc < ve < v and ve may go, and at least
  * max(acc >> 2, 1).  A speed c may go when every block end it reaches (rem <= c, adding the next
  * block's length to rem each time) it passes at most at that block's exit, or, at a stop's end
- * (exit 0), lands on it: the distance left there, rem (Q16), is at most that block's acc and
- * v - rem at most the head block's acc; and the block it ends in can still brake: c <= ve (c <= acc
+ * (exit 0), lands on it: the distance left there, rem (Q16), is at most that block's acc (and
+ * v - rem is within acc by the brake test below); and the block it ends in can still brake: c <= ve (c <= acc
  * toward a stop), or with D = rem - c (Q16 um) 2 acc D >= x^2 - ve^2, x = c toward a junction
  * (ve > 0: the continuous need), x = c - floor(acc / 2) toward a stop (the sampler's own steps
  * down, c - acc, c - 2 acc, ..., then the landing: at most (c - acc / 2)^2 / (2 acc)), the right

@@ -183,20 +183,14 @@ class Planner:
         p = cq * cq - eq * eq
         return ((acc >> 5) * ((rem - c) >> 11)) >> 1 >= p
 
-    @staticmethod
-    def lands(rem: int, v: int, stop_acc: int, head_acc: int) -> bool:
-        """nnik_plan.c lands: a sample reaching a stop's end rem (Q16) away lands on it when
-        rem <= the stop block's acc and v - rem <= the head block's acc."""
-        return rem <= stop_acc and v <= rem + head_acc
-
-    def can_go(self, c: int, rem: int, v: int | None = None) -> bool:
+    def can_go(self, c: int, rem: int) -> bool:
         """nnik_plan.c can_go: each block end the sample reaches (rem <= c) it passes at most at
-        that block's exit, or lands on it when it is a stop (lands; v: the speed before, self.v
-        when None), and the block it ends in can still brake."""
+        that block's exit, or lands on it when it is a stop (exit 0) and rem <= that block's acc,
+        and the block it ends in can still brake."""
         q, k = self.q, 0
         while rem <= c:
             if c > q[k].exit:
-                return not q[k].exit and self.lands(rem, self.v if v is None else v, q[k].acc, q[0].acc)
+                return not q[k].exit and rem <= q[k].acc
             k += 1
             rem += q[k].l16
         return self._can_brake(c, rem, q[k].exit, q[k].acc)

@@ -93,14 +93,14 @@ def _drain(pl: Planner, flushing: bool, X: list, Y: list, V: list, B: list, stop
             # the brake test (Planner.can_go; inline while the sample stays in its block), then
             # hold, then the floor
             if rem <= c:
-                ok = pl.can_go(c, rem, v)
+                ok = pl.can_go(c, rem)
             else:
                 ok = c <= ex or _brakes(c, rem, ex, acc)
             if not ok:
                 c = v if v < vn else vn
-                if not c or not pl.can_go(c, rem, v):
+                if not c or not pl.can_go(c, rem):
                     c = v - acc if v > acc else 0
-                    if c < ex < v and pl.can_go(ex, rem, v):
+                    if c < ex < v and pl.can_go(ex, rem):
                         c = ex
                     c = max(c, acc >> 2, 1)
             s += c
