@@ -22,7 +22,8 @@ PARTS = {  # a part of the loop: the functions it runs (the IK: NAME_ik)
     "the planner's sample": ("nnik_pl_sample", "can_go", "mul_q30", "nnik_pl_ready", "acc_axis", "__mulsi3",
                              "__muluhisi3", "__umulhisi3"),
     "the shaper": ("nnik_sh_step", "__usmulhisi3", "__usmulhisi3_tail"),
-    "the segment queue": ("out_sample", "emit", "sample", "nnik_grbl_poll", "nnik_grbl_wait", "nnik_port_idle"),
+    "the segment queue": ("out_sample", "emit", "sample", "nnik_grbl_poll", "nnik_grbl_wait", "nnik_port_idle",
+                          "nnik_gc_ahead", "commit", "nnik_port_room"),
     "the stepper interrupt": ("__vector_11", "__vectors"),
     "call prologues and epilogues": ("__prologue_saves__", "__epilogue_restores__"),
 }

@@ -52,11 +52,14 @@ def test_no_junction_and_no_acceleration_above_grbls_limits(pieces, lim, feed_sh
     assert r["accel"].size == 0 or r["accel"].max() <= 1.0 + 1e-12, r["accel"].max()
 
 
-@pytest.mark.xfail(reason="measured 1.00-2.09 on 25 random paths (2.09 with 2 blocks at 500 Hz; 1.14 on 0.01 mm "
-                          "chords). What dominates at stops: a 50 um reversal at 500 Hz, 8 um/"
-                          "sample^2 takes 9 samples against the float's 5: the brake test's continuous need holds "
-                          "the speed low a sample early and the last um are crept at the floor (acc / 4 per sample), "
-                          "since no tested speed may reach a stop's end",
+@pytest.mark.xfail(reason="measured 0.99-2.35, median 1.018, on 150 random paths (derandomized; before the sampler could "
+                          "land on a stop: 1.00-3.07, median 1.084); 67 of 150 above 1.02, most with 2-4 blocks at "
+                          "500 Hz on 10-90 um chords. What remains: toward a junction (exit > 0) the brake test keeps "
+                          "the continuous need (c^2 - e^2) / (2 acc), about half a sample's travel more than the "
+                          "sampler's own steps (the tighter discrete bound crossed junction limits: after a crossing "
+                          "the carried distance leaves the next block short of its own bound), and a sample only "
+                          "tries v + acc, v, v - acc (or the exit below v), so on chords shorter than a sample "
+                          "the speed can stay a whole acc below what the exits allow",
                    strict=False)
 @settings(max_examples=30, deadline=None, database=None, suppress_health_check=list(HealthCheck))
 @given(pieces=st.lists(piece, min_size=1, max_size=20), lim=limits)
@@ -64,6 +67,19 @@ def test_job_time_within_2_percent_of_the_float_planner(pieces, lim):
     cfg = machine(lim)
     r = compare(path_ops(pieces, cfg.max_feed_um_min), cfg)
     assert r["time_ratio"] <= 1.02, r["time_ratio"]
+
+
+@settings(max_examples=60, deadline=None, database=None, suppress_health_check=list(HealthCheck))
+@given(lim=limits, length=st.integers(1, 200000), ang=st.floats(0, 360))
+def test_a_lone_line_stops_within_three_samples_of_the_float_trapezoid(lim, length, ang):
+    """A stop is approached by the sampler's own steps down and landed on (no creeping at the floor):
+    a lone line takes at most the float trapezoid's time plus 3 samples (measured: 2.3 at most on
+    300 random lines; 22.9 when the last um were crept at acc / 4 per sample)."""
+    cfg = machine(lim)
+    x, y = round(length * math.cos(math.radians(ang))), round(length * math.sin(math.radians(ang)))
+    if x or y:
+        r = compare([("push", x, y, cfg.max_feed_um_min, 0, 0), ("flush",)], cfg)
+        assert (r["time_int_s"] - r["time_float_s"]) * cfg.sample_hz <= 3.0, r
 
 
 def test_oracle_junction_rule_by_hand():

@@ -99,9 +99,36 @@ static void sample(nnik_gc_t *g)
     out_sample(g, s.p, s.tool, s.v, s.vn, s.moved);
 }
 
+#if NNIK_GC_HOLD
+/* the held block into the planner, after the samples the planner owes before it (a push's) */
+static void commit(nnik_gc_t *g)
+{
+    if (!g->pending)
+        return;
+    while (nnik_pl_ready(&g->pl, 0))
+        sample(g);
+    nnik_pl_push(&g->pl, g->pend[0], g->pend[1], g->pend[2], g->pend_tool);
+    g->pending = 0;
+}
+
+uint8_t nnik_gc_ahead(nnik_gc_t *g)
+{
+    if (!g->pending)
+        return 0;
+    if (nnik_pl_ready(&g->pl, 0))
+        sample(g);
+    else
+        commit(g);
+    return 1;
+}
+#else
+#define commit(g) ((void)0)
+#endif
+
 void nnik_gc_flush(nnik_gc_t *g)
 {
     int32_t p[2];
+    commit(g);
     while (nnik_pl_ready(&g->pl, 1))
         sample(g);
     p[0] = g->pl.start[0];
@@ -141,9 +168,20 @@ NOINLINE static int8_t push(nnik_gc_t *g, const int32_t p[2], int32_t feed)
 #endif
     if (g->check)
         return 0;
+#if NNIK_GC_HOLD
+    commit(g);
+    g->pend[0] = e[0];
+    g->pend[1] = e[1];
+    g->pend[2] = feed;
+    g->pend_tool = g->tool;
+    g->pending = 1;
+    if (!nnik_pl_ready(&g->pl, 0))
+        commit(g); /* else held until the head block is left (nnik_gc_ahead) */
+#else
     while (nnik_pl_ready(&g->pl, 0))
         sample(g);
     nnik_pl_push(&g->pl, e[0], e[1], feed, g->tool);
+#endif
     g->last_tool = g->tool;
     g->blocks++;
     return 0;

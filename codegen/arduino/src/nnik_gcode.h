@@ -44,6 +44,17 @@ extern "C" {
 #endif
 #define NNIK_GC_N_WCS (NNIK_GC_WCS ? 6 : 1)
 
+/* 1: a block that finds the planner full is held back and its line answered at once
+ * (nnik_gc_ahead): the stepper keeps being fed while the sender's next line travels.  About
+ * 380 B of flash and 15 B of RAM: on by default on the ATmega2560 only (-D to choose). */
+#ifndef NNIK_GC_HOLD
+#if defined(__AVR_ATmega2560__)
+#define NNIK_GC_HOLD 1
+#else
+#define NNIK_GC_HOLD 0
+#endif
+#endif
+
 /* results of nnik_gc_eol */
 #define NNIK_GC_OK 0     /* done (an empty, comment or '%' line too) */
 #define NNIK_GC_SYNC 1   /* done; answer after the motion has finished (M2, M30, M400) */
@@ -74,6 +85,11 @@ struct nnik_gc {
     uint32_t overspeed;   /* samples stretched beyond their ticks: a motor needed more steps */
     uint32_t clamped;     /* segment ends the IK clamped to its domain */
     nnik_plan_t pl;
+#if NNIK_GC_HOLD
+    int32_t pend[3];      /* a block held back while the planner is full: X, Y (um), feed (um/min) */
+    uint16_t pend_tool;   /* its tool word */
+    uint8_t pending;      /* 1: pend waits for the head block to be left (its line is answered) */
+#endif
     nnik_shaper_t sh;
     uint16_t settle;      /* shaper tail samples still owed after the last planner sample */
     uint16_t tail_tool;   /* the tool word of the last planner sample */
@@ -114,6 +130,14 @@ int8_t nnik_gc_line(nnik_gc_t *g, const char *line);
 
 /* The planner runs out to rest and the shaper's tail follows (the end of a job: M400 does it). */
 void nnik_gc_flush(nnik_gc_t *g);
+
+/* A block held back (pending: the planner was full when its line came, and the line is answered
+ * at once so that the sender's next line travels meanwhile): one sample while the planner is
+ * full, else the block goes in.  The planner sees the same pushes and samples in the same order
+ * as without holding back (its samples depend on the blocks alone).  1 if it did either. */
+#if NNIK_GC_HOLD
+uint8_t nnik_gc_ahead(nnik_gc_t *g);
+#endif
 
 /* internal: the words of g->line run (nnik_gc_parse.c -> nnik_gcode.c) */
 int8_t nnik_gc_exec(nnik_gc_t *g);

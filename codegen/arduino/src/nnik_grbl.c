@@ -93,7 +93,11 @@ static void msg_f(const char *s)
 /* motion planned or running: grbl's Run (and its "not idle" for $ commands) */
 static uint8_t busy(void)
 {
+#if NNIK_GC_HOLD
+    return nnik_port_busy() || gc->pl.count || gc->pending;
+#else
     return nnik_port_busy() || gc->pl.count;
+#endif
 }
 
 static void report(void)
@@ -426,6 +430,10 @@ void nnik_grbl_run(void)
             /* nothing more coming: the planner runs out what it holds, to rest (M400's flush) */
             if (!partial && nnik_port_quiet())
                 nnik_gc_flush(gc);
+#if NNIK_GC_HOLD
+            else if (!alarm && gc->pending && nnik_port_room() && nnik_gc_ahead(gc))
+                continue; /* while the next line comes: the held block's samples */
+#endif
             nnik_port_idle();
         } else if (c == '\n' || c == '\r') {
             partial = 0;

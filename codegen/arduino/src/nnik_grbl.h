@@ -61,6 +61,7 @@ uint8_t nnik_port_busy(void);     /* 1 while the stepper has a segment running o
 uint8_t nnik_port_held(void);     /* 1 once a feed hold has brought the stepper to a stop */
 void nnik_port_hold(uint8_t on);  /* 1: decelerate and stop at a segment's end; 0: resume */
 uint8_t nnik_port_quiet(void);    /* 1: no byte for a while and the stepper's queue nearly dry */
+uint8_t nnik_port_room(void);     /* 1: the stepper's queue has room for a segment (the sketch is busy) */
 void nnik_port_idle(void);        /* sleep until an interrupt, unless a byte or request waits */
 /* where the motors are: the engine's last sample less the queued segments not yet started */
 void nnik_port_where(int32_t pt[2]);

@@ -48,11 +48,17 @@
  * most vn; above vn: v - acc, at least vn), then hold = min(v, vn) (not when 0); else
  * down = v - acc (0 below acc), or the exit ve when v - acc < ve < v and ve may go, and at least
  * max(acc >> 2, 1).  A speed c may go when every block end it reaches (rem <= c, adding the next
- * block's length to rem each time) it passes at most at that block's exit (never a stop's, exit
- * 0), and the block it ends in can still brake: c <= ve, or
- *     2 acc d >= 4 (ceil(c / 512)^2 - floor(ve / 512)^2), d = (rem - c) >> 16
- * (speeds below 2^24, 256 um per sample, so every product fits 32 bits; d in whole um; when
- * d > floor((2^32 - 1) / (2 acc)), kept per block, it passes without the product).  Then s += c; at
+ * block's length to rem each time) it passes at most at that block's exit, or, at a stop's end
+ * (exit 0), lands on it: the distance left there, rem (Q16), is at most that block's acc (and
+ * v - rem is within acc by the brake test below); and the block it ends in can still brake: c <= ve (c <= acc
+ * toward a stop), or with D = rem - c (Q16 um) 2 acc D >= x^2 - ve^2, x = c toward a junction
+ * (ve > 0: the continuous need), x = c - floor(acc / 2) toward a stop (the sampler's own steps
+ * down, c - acc, c - 2 acc, ..., then the landing: at most (c - acc / 2)^2 / (2 acc)), the right
+ * side rounded up as 2^18 (ceil(x / 512)^2 - floor(ve / 512)^2) = 2^18 P (speeds below 2^24, 256 um
+ * per sample, so every product fits 32 bits) and D rounded down: with d = floor(D / 65536)
+ * (whole um) it passes when d > floor((2^32 - 1) / (2 acc)) (dbig, kept per block), else it needs
+ * floor(floor(acc / 32) floor(D / 2048) / 2) >= P (D in 1/32 um: a stop's last samples are not held back).
+ * Then s += c; at
  * or past the end of a block with exit 0 the sample lands exactly on its end and v = 0 (a stop);
  * past the end of any other block the remainder carries into the next.  The point is
  * start + ((u * floor(s / 65536)) >> 30) per axis (arithmetic shift: floor), or the end point.

@@ -210,23 +210,28 @@ class Planner:
 
     @staticmethod
     def _can_brake(c: int, rem: int, ve: int, acc: int) -> bool:
-        if c <= ve:
+        """nnik_plan.c can_brake: c <= ve (toward a stop, ve = 0: c <= acc), or 2 acc (rem - c) >=
+        x^2 - ve^2 with x = c toward a junction, c - floor(acc / 2) toward a stop (the sampler's own
+        steps down, then it lands), rounded against it (acc / 32, D in 1/32 um)."""
+        if c <= ve or (not ve and c <= acc):
             return True
         if rem <= c:
             return False
         d = (rem - c) >> 16
         if d > U32 // (2 * acc):
             return True
-        cq, eq = (c + 511) >> 9, ve >> 9
-        return 2 * acc * d >= 4 * (cq * cq - eq * eq)
+        cq, eq = (c - (0 if ve else acc >> 1) + 511) >> 9, ve >> 9
+        p = cq * cq - eq * eq
+        return ((acc >> 5) * ((rem - c) >> 11)) >> 1 >= p
 
     def can_go(self, c: int, rem: int) -> bool:
         """nnik_plan.c can_go: each block end the sample reaches (rem <= c) it passes at most at
-        that block's exit (never a stop's), and the block it ends in can still brake."""
+        that block's exit, or lands on it when it is a stop (exit 0) and rem <= that block's acc,
+        and the block it ends in can still brake."""
         q, k = self.q, 0
         while rem <= c:
             if c > q[k].exit:
-                return False
+                return not q[k].exit and rem <= q[k].acc
             k += 1
             rem += q[k].l16
         return self._can_brake(c, rem, q[k].exit, q[k].acc)

@@ -97,12 +97,7 @@ def _drain(pl: Planner, flushing: bool, X: list, Y: list, V: list, B: list, stop
             if rem <= c:
                 ok = pl.can_go(c, rem)
             else:
-                ok = True
-                if c > ex:
-                    d = (rem - c) >> 16
-                    if d <= U32 // (2 * acc):
-                        cq, eq = (c + 511) >> 9, ex >> 9
-                        ok = 2 * acc * d >= 4 * (cq * cq - eq * eq)
+                ok = c <= ex or _brakes(c, rem, ex, acc)
             if not ok:
                 c = v if v < vn else vn
                 if not c or not pl.can_go(c, rem):

@@ -95,3 +95,16 @@ def test_the_tool_is_the_machines_not_the_files(picked_run, tmp_path, capsys):
     assert main(["job", str(picked_run), str(job), "--no-chip", "--tool", "plasma"]) == 2
     err = capsys.readouterr().err.strip()
     assert err.startswith("nnik: error: ") and "--tool" in err and "laser, pen, servo, spindle, knife, none" in err
+
+
+def test_a_held_block_keeps_chip_equal_to_model_on_the_mega(picked_run):
+    """On the ATmega2560 a block that finds the planner full is held back and its line answered at
+    once (NNIK_GC_HOLD, nnik_gc_ahead): the planner sees the same pushes and samples in the same
+    order, so a job with comments and tool moves between its blocks gives every step, reply and
+    tool change the model's."""
+    from nnik.job.open_loop import run_job
+    from tests.firmware.gcode.conftest import require_chip
+
+    require_chip()
+    c = run_job(picked_run, JOBS / "inkscape_gcodetools.gcode", mcu="atmega2560")["chip"]
+    assert c["steps_equal"] and c["replies_equal"] and c["tool_equal"], c
