@@ -169,20 +169,9 @@ def _prefixed(path: str, k: str) -> str:
     return k if k.startswith(("c:", "asm:")) else f"{path}:{k}"
 
 
-def cycle_prefix(im, target: str | None) -> str:
-    """The prefix of a network's cycle features: its code path, and on AVR "c2" for the C path of
-    two hidden layers.  avr-gcc allocates registers differently there (the layer-1 outputs stay in
-    registers through layer 2; a one-layer C path network has a tanh replacement, called from C,
-    around which the sums are saved), so the same primitive costs other cycles in the two: they are
-    priced apart, each by networks of its own shape."""
-    path = fast_path(im, target)
-    return "c2" if path == "c" and target == "avr" and len(im.hidden) == 2 else path
-
-
 def fast_counts_prefixed(im, far: bool, target: str | None) -> dict[str, float]:
-    """The constant per-call cycle features, prefixed by the code path (cycle_prefix)."""
-    _, c = _fast_counts(im, target)
-    path = cycle_prefix(im, target)
+    """The constant per-call cycle features, prefixed by the code path."""
+    path, c = _fast_counts(im, target)
     f = {_prefixed(path, k): float(v) for k, v in c.items()}
     if far:
         f[f"{path}:far_neuron"] = float(sum(structure(im)["H"]))
@@ -190,7 +179,7 @@ def fast_counts_prefixed(im, far: bool, target: str | None) -> dict[str, float]:
 
 
 def fast_cycle_features(im, in_um: np.ndarray, far: bool, target: str | None) -> dict[str, np.ndarray]:
-    path = cycle_prefix(im, target)
+    path = fast_path(im, target)
     N = len(in_um)
     one = np.ones(N)
     f = {k: v * one for k, v in fast_counts_prefixed(im, far, target).items()}

@@ -68,16 +68,12 @@ def draw_specs(n: int, seed: int, depths: tuple[int, ...] = (1, 2), tanhs: tuple
 # networks' 1-3 and 17-24, and the assembly body's output stage has format combinations the
 # structural networks do not reach; its calibration therefore also measures networks drawn as
 # the search draws them (seeds no search check uses: the checks draw with 31 and 20270101-2).
-# Half of the search's draws have two hidden layers, but only one in eight of those the kernel's
-# own tanh table, one in three a full output: the third draw has two layers only, so that the
-# two-layer C path's own coefficients (fast_features.cycle_prefix) are measured at every width.
-SEARCH_CAL_DRAWS: dict[str, tuple[tuple[int, int, tuple[int, ...]], ...]] = {
-    "avr": ((101, 100, (1, 2)), (303, 80, (1, 2)), (505, 100, (2,)))}
+SEARCH_CAL_DRAWS: dict[str, tuple[tuple[int, int], ...]] = {"avr": ((101, 100), (303, 80))}
 
 
 def search_calibration_specs(target: str) -> list[CalSpec]:
     """The search-space draws of a target's fast-kernel calibration."""
-    return [sp for seed, n, depths in SEARCH_CAL_DRAWS.get(target, ()) for sp in draw_specs(n, seed, depths)]
+    return [sp for seed, n in SEARCH_CAL_DRAWS.get(target, ()) for sp in draw_specs(n, seed)]
 
 
 # picked by coverage (python3 -m nnik.implementations.mlp.cost.coverage): they widen the span of the
