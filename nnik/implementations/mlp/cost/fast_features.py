@@ -92,6 +92,8 @@ def _fast_counts(im, target: str | None) -> tuple[str, dict[str, float]]:
         _shift_terms(c, "t_sh", sh, H, T_REGIMES)
         if L.saturate:
             c["sat_clamp"] = c.get("sat_clamp", 0.0) + H
+    if path == "c" and target == "avr" and s["layers"] == 2:
+        c["mac_hidden_frame"] = float(s["H"][1] * max(s["H"][0] - AVR_HB0_IN_REGS, 0))
     looped_out = any(int(np.asarray(L.W).size) > umax for L in im.hidden) and bool(
         int(np.asarray(im.hidden[-1].W).size) > umax)
     for k, n in _weight_classes(o.V, looped_out).items():
@@ -169,9 +171,29 @@ def _prefixed(path: str, k: str) -> str:
     return k if k.startswith(("c:", "asm:")) else f"{path}:{k}"
 
 
+# avr-gcc keeps about this many layer-1 outputs of a two-layer C path in registers through layer 2
+# (next to the accumulator, the two output sums, the weight, the zero, r0:r1 and Z for the table);
+# each further one is read from the frame by every layer-2 neuron (nnik.bench.mlp_cost.avr_static:
+# a layer-2 multiply-accumulate costs 25.5 cycles at widths up to 6, 27.5 at 17-20)
+AVR_HB0_IN_REGS = 6
+
+
+def cycle_prefix(im, target: str | None) -> str:
+    """The prefix of a network's cycle features: its code path, and on AVR "c2" for the C path of
+    two hidden layers.  avr-gcc allocates registers differently there (the layer-1 outputs stay in
+    registers through layer 2; a one-layer C path network has a tanh replacement, called from C,
+    around which the sums are saved), so the same primitive costs other cycles in the two: they are
+    priced apart, each by networks of its own shape."""
+    path = fast_path(im, target)
+    if path != "c" or target != "avr" or len(im.hidden) != 2:
+        return path
+    return "c2" if all(getattr(L, "tanh_step", 0) for L in im.hidden) else "c2call"
+
+
 def fast_counts_prefixed(im, far: bool, target: str | None) -> dict[str, float]:
-    """The constant per-call cycle features, prefixed by the code path."""
-    path, c = _fast_counts(im, target)
+    """The constant per-call cycle features, prefixed by the code path (cycle_prefix)."""
+    _, c = _fast_counts(im, target)
+    path = cycle_prefix(im, target)
     f = {_prefixed(path, k): float(v) for k, v in c.items()}
     if far:
         f[f"{path}:far_neuron"] = float(sum(structure(im)["H"]))
@@ -179,7 +201,7 @@ def fast_counts_prefixed(im, far: bool, target: str | None) -> dict[str, float]:
 
 
 def fast_cycle_features(im, in_um: np.ndarray, far: bool, target: str | None) -> dict[str, np.ndarray]:
-    path = fast_path(im, target)
+    path = cycle_prefix(im, target)
     N = len(in_um)
     one = np.ones(N)
     f = {k: v * one for k, v in fast_counts_prefixed(im, far, target).items()}
