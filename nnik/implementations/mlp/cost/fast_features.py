@@ -92,6 +92,8 @@ def _fast_counts(im, target: str | None) -> tuple[str, dict[str, float]]:
         _shift_terms(c, "t_sh", sh, H, T_REGIMES)
         if L.saturate:
             c["sat_clamp"] = c.get("sat_clamp", 0.0) + H
+    if path == "c" and target == "avr" and s["residual"]:
+        c["residual_neuron"] = float(s["neurons"])
     if path == "c" and target == "avr" and s["layers"] == 2:
         c["mac_hidden_frame"] = float(s["H"][1] * max(s["H"][0] - AVR_HB0_IN_REGS, 0))
     looped_out = any(int(np.asarray(L.W).size) > umax for L in im.hidden) and bool(
