@@ -93,6 +93,9 @@ def _fast_counts(im, target: str | None) -> tuple[str, dict[str, float]]:
         if L.saturate:
             c["sat_clamp"] = c.get("sat_clamp", 0.0) + H
     if path == "c" and target == "avr" and s["residual"]:
+        # avr-gcc -O2, one layer with a tanh replacement: a full network saves and restores its
+        # sums around each call (4 ldd + 4 std a neuron), a residual one keeps them in the frame
+        # (2 ldd a neuron): the residual's own cost per neuron (avr_static counts them)
         c["residual_neuron"] = float(s["neurons"])
     if path == "c" and target == "avr" and s["layers"] == 2:
         c["mac_hidden_frame"] = float(s["H"][1] * max(s["H"][0] - AVR_HB0_IN_REGS, 0))
@@ -181,11 +184,12 @@ AVR_HB0_IN_REGS = 6
 
 
 def cycle_prefix(im, target: str | None) -> str:
-    """The prefix of a network's cycle features: its code path, and on AVR "c2" for the C path of
-    two hidden layers.  avr-gcc allocates registers differently there (the layer-1 outputs stay in
-    registers through layer 2; a one-layer C path network has a tanh replacement, called from C,
-    around which the sums are saved), so the same primitive costs other cycles in the two: they are
-    priced apart, each by networks of its own shape."""
+    """The prefix of a network's cycle features: its code path, and on AVR, for the C path of two
+    hidden layers, "c2" (the kernel's own tanh table, inline: the layer-1 outputs stay in registers
+    through layer 2 up to AVR_HB0_IN_REGS of them) or "c2call" (a tanh replacement, called: what is
+    live is saved around each call).  avr-gcc allocates registers differently in these and in the
+    one-layer C path, so the same primitive costs other cycles in each: they are priced apart,
+    each by calibration networks of its own shape."""
     path = fast_path(im, target)
     if path != "c" or target != "avr" or len(im.hidden) != 2:
         return path

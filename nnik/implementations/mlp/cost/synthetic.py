@@ -71,15 +71,16 @@ def draw_specs(n: int, seed: int, depths: tuple[int, ...] = (1, 2), tanhs: tuple
 # Half of the search's networks have two hidden layers, but only one in eight of the draws a
 # two-layer network with the kernel's own tanh table: avr-gcc's code for those (every layer-1
 # output kept in registers through layer 2 at small widths, read from the frame at large ones;
-# tests/bench/mlp_cost/test_avr_static.py) was priced from widths 3 and 17-24 and over-predicted
-# by up to 6 % at widths 3-6.  The third draw measures them at every search width.
+# nnik.bench.mlp_cost.avr_static) were priced from widths 3 and 17-24 and over-predicted by up
+# to 6 % at widths 3-6.  The third draw (seed 505) measures them at every search width.
 SEARCH_CAL_DRAWS: dict[str, tuple[tuple[int, int, tuple[int, ...], tuple[str, ...]], ...]] = {
     "avr": ((101, 100, (1, 2), SEARCH_TANHS), (303, 80, (1, 2), SEARCH_TANHS), (505, 60, (2,), ("",)))}
 
 
 def search_calibration_specs(target: str) -> list[CalSpec]:
     """The search-space draws of a target's fast-kernel calibration."""
-    return [sp for seed, n, depths, tanhs in SEARCH_CAL_DRAWS.get(target, ()) for sp in draw_specs(n, seed, depths, tanhs)]
+    return [sp for seed, n, depths, tanhs in SEARCH_CAL_DRAWS.get(target, ())
+            for sp in draw_specs(n, seed, depths, tanhs)]
 
 
 # picked by coverage (python3 -m nnik.implementations.mlp.cost.coverage): they widen the span of the
