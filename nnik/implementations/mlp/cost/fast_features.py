@@ -98,7 +98,8 @@ def _fast_counts(im, target: str | None) -> tuple[str, dict[str, float]]:
         # (2 ldd a neuron): the residual's own cost per neuron (avr_static counts them)
         c["residual_neuron"] = float(s["neurons"])
     if path == "c" and target == "avr" and s["layers"] == 2:
-        c["mac_hidden_frame"] = float(s["H"][1] * max(s["H"][0] - AVR_HB0_IN_REGS, 0))
+        regs = AVR_HB0_IN_REGS if all(getattr(L, "tanh_step", 0) for L in im.hidden) else AVR_HB0_CALL_SAVED
+        c["mac_hidden_frame"] = float(s["H"][1] * max(s["H"][0] - regs, 0))
     looped_out = any(int(np.asarray(L.W).size) > umax for L in im.hidden) and bool(
         int(np.asarray(im.hidden[-1].W).size) > umax)
     for k, n in _weight_classes(o.V, looped_out).items():
@@ -181,6 +182,9 @@ def _prefixed(path: str, k: str) -> str:
 # each further one is read from the frame by every layer-2 neuron (nnik.bench.mlp_cost.avr_static:
 # a layer-2 multiply-accumulate costs 25.5 cycles at widths up to 6, 27.5 at 17-20)
 AVR_HB0_IN_REGS = 6
+# with a tanh replacement, called in every layer-2 neuron, only the call-saved r2-r17 keep values
+# across the calls: the two output sums and this many layer-1 outputs
+AVR_HB0_CALL_SAVED = 4
 
 
 def cycle_prefix(im, target: str | None) -> str:
@@ -196,11 +200,17 @@ def cycle_prefix(im, target: str | None) -> str:
     return "c2" if all(getattr(L, "tanh_step", 0) for L in im.hidden) else "c2call"
 
 
+def _feature_key(path: str, k: str) -> str:
+    """A feature's key under cycle_prefix `path`: a called tanh replacement runs the same function
+    whatever calls it, so its cost (tanh[...], tanh_class[...]) keeps the C path's key."""
+    return _prefixed("c" if path == "c2call" and k.startswith("tanh") else path, k)
+
+
 def fast_counts_prefixed(im, far: bool, target: str | None) -> dict[str, float]:
     """The constant per-call cycle features, prefixed by the code path (cycle_prefix)."""
     _, c = _fast_counts(im, target)
     path = cycle_prefix(im, target)
-    f = {_prefixed(path, k): float(v) for k, v in c.items()}
+    f = {_feature_key(path, k): float(v) for k, v in c.items()}
     if far:
         f[f"{path}:far_neuron"] = float(sum(structure(im)["H"]))
     return f
@@ -221,7 +231,8 @@ def fast_cycle_features(im, in_um: np.ndarray, far: bool, target: str | None) ->
             idx = tanh_class_index(V, T)
             for ci, name in enumerate(tanh_classes(V)):
                 if ci:
-                    f[f"{path}:tanh_class[{V}][{name}]"] = f.get(f"{path}:tanh_class[{V}][{name}]", 0) + \
+                    key = _feature_key(path, f"tanh_class[{V}][{name}]")
+                    f[key] = f.get(key, 0) + \
                         np.count_nonzero(idx == ci, axis=1).astype(float)
     if sat.any():
         f[f"{path}:sat_hit"] = sat
