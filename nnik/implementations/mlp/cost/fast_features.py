@@ -92,6 +92,14 @@ def _fast_counts(im, target: str | None) -> tuple[str, dict[str, float]]:
         _shift_terms(c, "t_sh", sh, H, T_REGIMES)
         if L.saturate:
             c["sat_clamp"] = c.get("sat_clamp", 0.0) + H
+    if path == "c" and target == "avr" and s["residual"]:
+        # avr-gcc -O2, one layer with a tanh replacement: a full network saves and restores its
+        # sums around each call (4 ldd + 4 std a neuron), a residual one keeps them in the frame
+        # (2 ldd a neuron): the residual's own cost per neuron (avr_static counts them)
+        c["residual_neuron"] = float(s["neurons"])
+    if path == "c" and target == "avr" and s["layers"] == 2:
+        regs = AVR_HB0_IN_REGS if all(getattr(L, "tanh_step", 0) for L in im.hidden) else AVR_HB0_CALL_SAVED
+        c["mac_hidden_frame"] = float(s["H"][1] * max(s["H"][0] - regs, 0))
     looped_out = any(int(np.asarray(L.W).size) > umax for L in im.hidden) and bool(
         int(np.asarray(im.hidden[-1].W).size) > umax)
     for k, n in _weight_classes(o.V, looped_out).items():
@@ -169,17 +177,47 @@ def _prefixed(path: str, k: str) -> str:
     return k if k.startswith(("c:", "asm:")) else f"{path}:{k}"
 
 
+# avr-gcc keeps about this many layer-1 outputs of a two-layer C path in registers through layer 2
+# (next to the accumulator, the two output sums, the weight, the zero, r0:r1 and Z for the table);
+# each further one is read from the frame by every layer-2 neuron (nnik.bench.mlp_cost.avr_static:
+# a layer-2 multiply-accumulate costs 25.5 cycles at widths up to 6, 27.5 at 17-20)
+AVR_HB0_IN_REGS = 6
+# with a tanh replacement, called in every layer-2 neuron, only the call-saved r2-r17 keep values
+# across the calls: the two output sums and this many layer-1 outputs
+AVR_HB0_CALL_SAVED = 4
+
+
+def cycle_prefix(im, target: str | None) -> str:
+    """The prefix of a network's cycle features: its code path, and on AVR, for the C path of two
+    hidden layers, "c2" (the kernel's own tanh table, inline: the layer-1 outputs stay in registers
+    through layer 2 up to AVR_HB0_IN_REGS of them) or "c2call" (a tanh replacement, called: what is
+    live is saved around each call).  avr-gcc allocates registers differently in these and in the
+    one-layer C path, so the same primitive costs other cycles in each: they are priced apart,
+    each by calibration networks of its own shape."""
+    path = fast_path(im, target)
+    if path != "c" or target != "avr" or len(im.hidden) != 2:
+        return path
+    return "c2" if all(getattr(L, "tanh_step", 0) for L in im.hidden) else "c2call"
+
+
+def _feature_key(path: str, k: str) -> str:
+    """A feature's key under cycle_prefix `path`: a called tanh replacement runs the same function
+    whatever calls it, so its cost (tanh[...], tanh_class[...]) keeps the C path's key."""
+    return _prefixed("c" if path == "c2call" and k.startswith("tanh") else path, k)
+
+
 def fast_counts_prefixed(im, far: bool, target: str | None) -> dict[str, float]:
-    """The constant per-call cycle features, prefixed by the code path."""
-    path, c = _fast_counts(im, target)
-    f = {_prefixed(path, k): float(v) for k, v in c.items()}
+    """The constant per-call cycle features, prefixed by the code path (cycle_prefix)."""
+    _, c = _fast_counts(im, target)
+    path = cycle_prefix(im, target)
+    f = {_feature_key(path, k): float(v) for k, v in c.items()}
     if far:
         f[f"{path}:far_neuron"] = float(sum(structure(im)["H"]))
     return f
 
 
 def fast_cycle_features(im, in_um: np.ndarray, far: bool, target: str | None) -> dict[str, np.ndarray]:
-    path = fast_path(im, target)
+    path = cycle_prefix(im, target)
     N = len(in_um)
     one = np.ones(N)
     f = {k: v * one for k, v in fast_counts_prefixed(im, far, target).items()}
@@ -193,7 +231,8 @@ def fast_cycle_features(im, in_um: np.ndarray, far: bool, target: str | None) ->
             idx = tanh_class_index(V, T)
             for ci, name in enumerate(tanh_classes(V)):
                 if ci:
-                    f[f"{path}:tanh_class[{V}][{name}]"] = f.get(f"{path}:tanh_class[{V}][{name}]", 0) + \
+                    key = _feature_key(path, f"tanh_class[{V}][{name}]")
+                    f[key] = f.get(key, 0) + \
                         np.count_nonzero(idx == ci, axis=1).astype(float)
     if sat.any():
         f[f"{path}:sat_hit"] = sat
