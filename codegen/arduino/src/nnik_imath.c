@@ -24,6 +24,25 @@ uint32_t nnik_isqrt32(uint32_t v)
 
 uint32_t nnik_div64_32(uint32_t hi, uint32_t lo, uint32_t d)
 {
+#if defined(__GNUC__) && defined(__AVR__)
+    /* The same restoring division as the C below, step for step, in AVR assembly (about half the
+     * cycles: avr-gcc moves each 32-bit shift through a temporary).  Per step, hi:lo shifts left
+     * one bit; the carry out of hi is the bit `top`; when it is set or hi >= d, d is subtracted
+     * (mod 2^32) and the quotient bit enters lo's bottom (0 after the shift, so inc sets it). */
+    uint8_t n = 32;
+    __asm__("1:  lsl %A1\n\trol %B1\n\trol %C1\n\trol %D1\n\t"
+            "rol %A0\n\trol %B0\n\trol %C0\n\trol %D0\n\t"
+            "brcs 2f\n\t"
+            "cp %A0,%A3\n\tcpc %B0,%B3\n\tcpc %C0,%C3\n\tcpc %D0,%D3\n\t"
+            "brcs 3f\n"
+            "2:  sub %A0,%A3\n\tsbc %B0,%B3\n\tsbc %C0,%C3\n\tsbc %D0,%D3\n\t"
+            "inc %A1\n"
+            "3:  dec %2\n\t"
+            "brne 1b"
+            : "+r"(hi), "+r"(lo), "+r"(n)
+            : "r"(d));
+    return lo;
+#else
     uint8_t i, top;
     for (i = 0; i < 32; i++) { /* restoring division, one bit a step; hi < d throughout; the
                                 * quotient's bits enter lo from below as the dividend leaves it */
@@ -36,6 +55,7 @@ uint32_t nnik_div64_32(uint32_t hi, uint32_t lo, uint32_t d)
         }
     }
     return lo;
+#endif
 }
 
 uint32_t nnik_isqrt64(uint64_t v)
@@ -46,7 +66,10 @@ uint32_t nnik_isqrt64(uint64_t v)
 uint32_t nnik_isqrt_hl(uint32_t hi, uint32_t lo)
 {
     uint32_t r, rl, tl;
-    uint8_t i, rx, tx;
+    uint8_t rx, tx;
+#if !(defined(__GNUC__) && defined(__AVR__))
+    uint8_t i;
+#endif
     if (!hi)
         return nnik_isqrt32(lo); /* 32-bit arithmetic: far cheaper on AVR */
     /* digit by digit: the root of the high word, then the low word's 16 bit pairs, with the
@@ -54,6 +77,28 @@ uint32_t nnik_isqrt_hl(uint32_t hi, uint32_t lo)
     r = nnik_isqrt32(hi);
     rl = hi - r * r;
     rx = 0;
+#if defined(__GNUC__) && defined(__AVR__)
+    /* The same 16 steps as the C below, in AVR assembly (about half the cycles): rx:rl:lo shifts
+     * left two bits; r <<= 1; the trial tx:tl = (r << 1) | 1 (the C's 4 r + 1 of the old r: tl's
+     * bit 0 is 0 after the shift, so inc sets it); when rx:rl >= tx:tl it is subtracted and r's
+     * new bit 0 (0 after the shift) is set. */
+    tx = 16; /* the step count until the loop reuses tx for the trial's top byte */
+    __asm__("mov __tmp_reg__,%5\n"
+            "1:  lsl %A3\n\trol %B3\n\trol %C3\n\trol %D3\n\t"
+            "rol %A1\n\trol %B1\n\trol %C1\n\trol %D1\n\trol %2\n\t"
+            "lsl %A3\n\trol %B3\n\trol %C3\n\trol %D3\n\t"
+            "rol %A1\n\trol %B1\n\trol %C1\n\trol %D1\n\trol %2\n\t"
+            "lsl %A0\n\trol %B0\n\trol %C0\n\trol %D0\n\t"
+            "mov %A4,%A0\n\tmov %B4,%B0\n\tmov %C4,%C0\n\tmov %D4,%D0\n\tclr %5\n\t"
+            "lsl %A4\n\trol %B4\n\trol %C4\n\trol %D4\n\trol %5\n\tinc %A4\n\t"
+            "cp %A1,%A4\n\tcpc %B1,%B4\n\tcpc %C1,%C4\n\tcpc %D1,%D4\n\tcpc %2,%5\n\t"
+            "brcs 2f\n\t"
+            "sub %A1,%A4\n\tsbc %B1,%B4\n\tsbc %C1,%C4\n\tsbc %D1,%D4\n\tsbc %2,%5\n\t"
+            "inc %A0\n"
+            "2:  dec __tmp_reg__\n\t"
+            "brne 1b"
+            : "+r"(r), "+r"(rl), "+r"(rx), "+r"(lo), "=&r"(tl), "+r"(tx));
+#else
     for (i = 0; i < 16; i++) {
         rx = (uint8_t)((rx << 2) | ((uint8_t)(rl >> 24) >> 6));
         rl = (rl << 2) | ((uint8_t)(lo >> 24) >> 6);
@@ -67,6 +112,7 @@ uint32_t nnik_isqrt_hl(uint32_t hi, uint32_t lo)
             r |= 1;
         }
     }
+#endif
     return r;
 }
 

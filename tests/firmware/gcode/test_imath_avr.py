@@ -1,0 +1,75 @@
+"""nnik_imath.c's AVR assembly paths (nnik_div64_32, nnik_isqrt_hl's loop) on the ATmega328P
+(avr-gcc + simavr) against Python's exact integers, at random (hypothesis) and at the edges: the
+same values as the portable C (tests/firmware/gcode/test_imath.py checks that on the host)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from nnik.targets.toolchain import HARNESS_DIR, find_tool
+
+SRC = HARNESS_DIR.parent / "arduino" / "src"
+WRAP = """#include "nnik_imath.h"
+int8_t imath_ik(const int32_t in[4], int32_t out[2])
+{
+    uint32_t a = (uint32_t)in[1], b = (uint32_t)in[2], c = (uint32_t)in[3];
+    out[0] = (int32_t)(in[0] ? nnik_div64_32(a, b, c) : nnik_isqrt_hl(a, b));
+    out[1] = 0;
+    return 0;
+}
+"""
+U32 = st.integers(0, (1 << 32) - 1)
+
+
+def s32(v: int) -> int:
+    return v - (1 << 32) if v >= 1 << 31 else v
+
+
+@pytest.fixture(scope="module")
+def avr(tmp_path_factory):
+    if find_tool("avr-gcc") is None or find_tool("simavr") is None:
+        pytest.skip("no avr-gcc/simavr")
+    from nnik.targets.avr import run_avr
+    wd = tmp_path_factory.mktemp("imath_avr")
+    (wd / "wrap.c").write_text(WRAP)
+
+    def ask(rows: list[tuple[int, int, int, int]]) -> list[int]:
+        vec = np.asarray([[op, s32(a), s32(b), s32(c)] for op, a, b, c in rows], dtype=np.int64)
+        r = run_avr([wd / "wrap.c", SRC / "nnik_imath.c"], [SRC], "imath", vec, workdir=wd, progress=False)
+        return [int(v) & 0xFFFFFFFF for v in r["outputs"][:, 0]]
+    return ask
+
+
+def isqrt_rows(vs):
+    return [(0, v >> 32, v & 0xFFFFFFFF, 0) for v in vs]
+
+
+def div_rows(rows):
+    return [(1, hi % d, lo, d) for d, lo, hi in rows]  # hi < d: the quotient fits 32 bits
+
+
+EDGE_SQ = [0, 1, 2, 3, (1 << 32) - 1, 1 << 32, (1 << 32) + 1, (1 << 60) - 1, 1 << 60, (1 << 62) - 1, 1 << 62,
+           (1 << 64) - 1, *(k * k + e for k in (1 << 16, 1 << 31, 3037000499, (1 << 32) - 1) for e in (-1, 0, 1))]
+EDGE_DIV = [(1, 0, 0), (1, 0xFFFFFFFF, 0), ((1 << 32) - 1, 0xFFFFFFFF, (1 << 32) - 2), (1 << 31, 0, (1 << 31) - 1),
+            ((1 << 31) + 1, 0xFFFFFFFF, 1 << 31), (3, 5, 2), ((1 << 32) - 1, 0, 0)]
+
+
+def test_edges_on_the_chip(avr):
+    rows = isqrt_rows(EDGE_SQ) + div_rows(EDGE_DIV)
+    want = [math.isqrt(v) for v in EDGE_SQ] + [((hi << 32) | lo) // d for _, hi, lo, d in div_rows(EDGE_DIV)]
+    assert avr(rows) == want
+
+
+@settings(max_examples=4, deadline=None)
+@given(st.lists(st.integers(0, (1 << 64) - 1) | st.integers(0, (1 << 62) - 1).map(lambda k: k | 1 << 60),
+                min_size=300, max_size=300),
+       st.lists(st.tuples(st.integers(1, (1 << 32) - 1), U32, U32), min_size=300, max_size=300))
+def test_random_on_the_chip(avr, vs, divs):
+    rows = isqrt_rows(vs) + div_rows(divs)
+    want = [math.isqrt(v) for v in vs] + [((hi << 32) | lo) // d for _, hi, lo, d in div_rows(divs)]
+    assert avr(rows) == want
