@@ -19,7 +19,35 @@
 
 uint32_t nnik_isqrt32(uint32_t v)
 {
+#if defined(__GNUC__) && defined(__AVR__)
+    /* Digit by digit in AVR assembly (about two thirds of the C's cycles): 16 steps, each shifts
+     * v's top bit pair into the remainder rm, doubles the root r and subtracts the trial
+     * t = 2 r + 1 (4 r + 1 of the old r) from rm when rm >= t, setting r's new bit 0.  The
+     * remainder stays <= 2 r <= 2^17 - 2 (shifted: < 2^19) and t < 2^18: 3 bytes each; r < 2^16:
+     * 2 bytes.  The same floor(sqrt(v)) as the bit-by-bit C below (tests/firmware/gcode/
+     * test_imath_avr.py checks it on simavr against Python's math.isqrt). */
+    uint16_t r = 0;
+    uint32_t rm = 0, t;
+    uint8_t n = 16;
+    while (n > 4 && !(uint8_t)(v >> 24)) { /* a zero top byte: 4 steps that leave r = rm = 0 */
+        v <<= 8;
+        n -= 4;
+    }
+    __asm__("1:  lsl %A0\n\trol %B0\n\trol %C0\n\trol %D0\n\trol %A1\n\trol %B1\n\trol %C1\n\t"
+            "lsl %A0\n\trol %B0\n\trol %C0\n\trol %D0\n\trol %A1\n\trol %B1\n\trol %C1\n\t"
+            "lsl %A2\n\trol %B2\n\t"
+            "mov %A3,%A2\n\tmov %B3,%B2\n\tclr %C3\n\tlsl %A3\n\trol %B3\n\trol %C3\n\tinc %A3\n\t"
+            "cp %A1,%A3\n\tcpc %B1,%B3\n\tcpc %C1,%C3\n\t"
+            "brcs 2f\n\t"
+            "sub %A1,%A3\n\tsbc %B1,%B3\n\tsbc %C1,%C3\n\t"
+            "inc %A2\n"
+            "2:  dec %4\n\t"
+            "brne 1b"
+            : "+r"(v), "+r"(rm), "+r"(r), "=&r"(t), "+r"(n));
+    return r;
+#else
     NNIK_ISQRT_BODY(uint32_t, v);
+#endif
 }
 
 uint32_t nnik_div64_32(uint32_t hi, uint32_t lo, uint32_t d)

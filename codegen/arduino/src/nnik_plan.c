@@ -21,9 +21,19 @@ __attribute__((noinline))
 #endif
 static uint32_t mul32(uint32_t a, uint32_t b, uint32_t *lo)
 {
+#if defined(__GNUC__) && defined(__AVR__)
+    union { /* AVR is little-endian: w[1] is p >> 32, by byte moves (avr-gcc calls a shift loop) */
+        uint64_t p;
+        uint32_t w[2];
+    } v;
+    v.p = (uint64_t)a * b;
+    *lo = v.w[0];
+    return v.w[1];
+#else
     uint64_t p = (uint64_t)a * b;
     *lo = (uint32_t)p;
     return (uint32_t)(p >> 32);
+#endif
 }
 
 /* floor(a * L / n), n > 0, at most 2^32 - 1 (an axis' limit on the block's acceleration) */

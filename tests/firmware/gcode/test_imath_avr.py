@@ -1,4 +1,4 @@
-"""nnik_imath.c's AVR assembly paths (nnik_div64_32, nnik_isqrt_hl's loop) on the ATmega328P
+"""nnik_imath.c's AVR assembly paths (nnik_div64_32, nnik_isqrt32, nnik_isqrt_hl's loop) on the ATmega328P
 (avr-gcc + simavr) against Python's exact integers, at random (hypothesis) and at the edges: the
 same values as the portable C (tests/firmware/gcode/test_imath.py checks that on the host)."""
 
@@ -18,7 +18,7 @@ WRAP = """#include "nnik_imath.h"
 int8_t imath_ik(const int32_t in[4], int32_t out[2])
 {
     uint32_t a = (uint32_t)in[1], b = (uint32_t)in[2], c = (uint32_t)in[3];
-    out[0] = (int32_t)(in[0] ? nnik_div64_32(a, b, c) : nnik_isqrt_hl(a, b));
+    out[0] = (int32_t)(in[0] == 2 ? nnik_isqrt32(b) : in[0] ? nnik_div64_32(a, b, c) : nnik_isqrt_hl(a, b));
     out[1] = 0;
     return 0;
 }
@@ -49,6 +49,10 @@ def isqrt_rows(vs):
     return [(0, v >> 32, v & 0xFFFFFFFF, 0) for v in vs]
 
 
+def isqrt32_rows(vs):
+    return [(2, 0, v, 0) for v in vs]
+
+
 def div_rows(rows):
     return [(1, hi % d, lo, d) for d, lo, hi in rows]  # hi < d: the quotient fits 32 bits
 
@@ -60,16 +64,18 @@ EDGE_DIV = [(1, 0, 0), (1, 0xFFFFFFFF, 0), ((1 << 32) - 1, 0xFFFFFFFF, (1 << 32)
 
 
 def test_edges_on_the_chip(avr):
-    rows = isqrt_rows(EDGE_SQ) + div_rows(EDGE_DIV)
-    want = [math.isqrt(v) for v in EDGE_SQ] + [((hi << 32) | lo) // d for _, hi, lo, d in div_rows(EDGE_DIV)]
+    e32 = [v for v in EDGE_SQ if v < 1 << 32] + [(1 << k) + e for k in range(32) for e in (-1, 0, 1)]
+    rows = isqrt_rows(EDGE_SQ) + isqrt32_rows(e32) + div_rows(EDGE_DIV)
+    want = [math.isqrt(v) for v in EDGE_SQ] + [math.isqrt(v) for v in e32] + [((hi << 32) | lo) // d for _, hi, lo, d in div_rows(EDGE_DIV)]
     assert avr(rows) == want
 
 
-@settings(max_examples=4, deadline=None)
+@settings(max_examples=8, deadline=None)
 @given(st.lists(st.integers(0, (1 << 64) - 1) | st.integers(0, (1 << 62) - 1).map(lambda k: k | 1 << 60),
-                min_size=300, max_size=300),
-       st.lists(st.tuples(st.integers(1, (1 << 32) - 1), U32, U32), min_size=300, max_size=300))
-def test_random_on_the_chip(avr, vs, divs):
-    rows = isqrt_rows(vs) + div_rows(divs)
-    want = [math.isqrt(v) for v in vs] + [((hi << 32) | lo) // d for _, hi, lo, d in div_rows(divs)]
+                min_size=1, max_size=300),
+       st.lists(U32 | st.integers(0, 1 << 20), min_size=1, max_size=300),
+       st.lists(st.tuples(st.integers(1, (1 << 32) - 1), U32, U32), min_size=1, max_size=300))
+def test_random_on_the_chip(avr, vs, v32, divs):
+    rows = isqrt_rows(vs) + isqrt32_rows(v32) + div_rows(divs)
+    want = [math.isqrt(v) for v in vs] + [math.isqrt(v) for v in v32] + [((hi << 32) | lo) // d for _, hi, lo, d in div_rows(divs)]
     assert avr(rows) == want
