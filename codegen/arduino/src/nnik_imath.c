@@ -150,8 +150,17 @@ int32_t nnik_div_round(int64_t a, uint32_t b)
     int32_t q;
     if (u < 0x40000000UL && b < 0x40000000UL) /* the same value by 32-bit division: far cheaper on AVR */
         q = (int32_t)((2 * (uint32_t)u + b) / (2 * b));
-    else
-        q = (int32_t)((2 * u + b) / (2 * (uint64_t)b));
+    else {
+        /* n = 2 u + b (mod 2^64, as before); when 2 b < 2^32 and n's high word is below it, the
+         * quotient fits 32 bits and nnik_div64_32 gives the same floor(n / 2 b) as the 64-bit
+         * division (libgcc's __udivdi3: thousands of cycles on AVR) */
+        uint64_t n = 2 * u + b;
+        uint32_t nh = (uint32_t)(n >> 32);
+        if (b < 0x80000000UL && nh < 2 * b)
+            q = (int32_t)nnik_div64_32(nh, (uint32_t)n, 2 * b);
+        else
+            q = (int32_t)(n / (2 * (uint64_t)b));
+    }
     return a < 0 ? -q : q;
 }
 
@@ -168,5 +177,8 @@ int64_t nnik_mul_r(int32_t x, uint32_t r)
         uint32_t p = (uint32_t)(x < 0 ? -x : x) * r;
         return x < 0 ? -(int64_t)p : (int64_t)p;
     }
-    return (int64_t)x * (int64_t)r;
+    { /* |x| r < 2^63 by a 32 x 32 -> 64 unsigned product (not libgcc's 64 x 64 __muldi3), then x's sign */
+        uint64_t p = (uint64_t)(x < 0 ? (uint32_t)0 - (uint32_t)x : (uint32_t)x) * r;
+        return x < 0 ? -(int64_t)p : (int64_t)p;
+    }
 }
