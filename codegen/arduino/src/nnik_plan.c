@@ -78,11 +78,29 @@ static uint32_t mul_sh16_sat(uint32_t a, uint32_t b)
     return hi >> 16 ? 0xFFFFFFFFUL : (hi << 16) | (lo >> 16);
 }
 
+/* floor((a0 b0 + a1 b1) / 2^30) of unit vectors (|a|, |b| <= 2^30: |the sum| <= 2^60).  On AVR
+ * from the sum's words s = hi 2^32 + lo: floor(s / 2^30) = 4 hi + (lo >> 30) exactly (|hi| <=
+ * 2^28: no overflow), not by libgcc's 64-bit shift (a 30-step loop over 8 bytes). */
+static int32_t q30_dot(const int32_t a[2], const int32_t b[2])
+{
+    int64_t s = (int64_t)a[0] * b[0] + (int64_t)a[1] * b[1];
+#if defined(__GNUC__) && defined(__AVR__)
+    union { /* little-endian */
+        int64_t s;
+        uint32_t w[2];
+    } v;
+    v.s = s;
+    return (int32_t)v.w[1] * 4 + (int32_t)((uint8_t)(v.w[0] >> 24) >> 6);
+#else
+    return (int32_t)(s >> 30);
+#endif
+}
+
 /* the square of the junction's speed limit between blocks a and b (b follows a), Q16, before the
  * feeds' cap (2^32 - 1: straight on); see nnik_plan.h */
 static uint32_t junction2(const nnik_pl_block_t *a, const nnik_pl_block_t *b)
 {
-    int32_t dot = (int32_t)((((int64_t)a->u[0] * b->u[0] + (int64_t)a->u[1] * b->u[1]) >> 30) - NNIK_PL_DOT_MARGIN);
+    int32_t dot = q30_dot(a->u, b->u) - NNIK_PL_DOT_MARGIN;
     uint32_t sn, r, hi[2], wl, w2, aj;
     uint8_t k = 0, e;
     if (dot <= -Q30 + NNIK_PL_REVERSAL)
@@ -274,14 +292,22 @@ void nnik_pl_push(nnik_plan_t *pl, int32_t x, int32_t y, int32_t feed, uint16_t 
             bits = 32;
         else
             top = lo;
+        while (top >> 8) { /* the bit length, a byte at a time first (the same count) */
+            top >>= 8;
+            bits += 8;
+        }
         while (top) {
             top >>= 1;
             bits++;
         }
         if (bits < 61)
             f = (uint8_t)((62 - bits) >> 1);
-        ax <<= f;
-        ay <<= f;
+        for (l2 = f; l2 >= 8; l2 -= 8) { /* << f, a byte at a time first (the same value) */
+            ax <<= 8;
+            ay <<= 8;
+        }
+        ax <<= l2;
+        ay <<= l2;
         top = mul32(ax, ax, &lo);
         top += mul32(ay, ay, &l2);
         lo += l2;
@@ -295,8 +321,10 @@ void nnik_pl_push(nnik_plan_t *pl, int32_t x, int32_t y, int32_t feed, uint16_t 
     b->end[1] = y;
     b->len = Lq >> f;
     b->lfr = (uint16_t)(f >= 16 ? Lq >> (f - 16) : Lq << (16 - f));
-    b->u[0] = (int32_t)nnik_div64_32(ax >> 2, ax << 30, Lc); /* (|d| 2^f 2^30) / Lc, |d| 2^f <= Lc */
-    b->u[1] = (int32_t)nnik_div64_32(ay >> 2, ay << 30, Lc);
+    /* (|d| 2^f 2^30) / Lc, |d| 2^f <= Lc; ax << 30 (mod 2^32) is ax's low 2 bits on top, by a
+     * byte (avr-gcc -Os shifts by 30 in a 30-step loop) */
+    b->u[0] = (int32_t)nnik_div64_32(ax >> 2, (uint32_t)(uint8_t)((uint8_t)ax << 6) << 24, Lc);
+    b->u[1] = (int32_t)nnik_div64_32(ay >> 2, (uint32_t)(uint8_t)((uint8_t)ay << 6) << 24, Lc);
     if (dx < 0)
         b->u[0] = -b->u[0];
     if (dy < 0)
