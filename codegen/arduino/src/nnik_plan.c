@@ -78,6 +78,21 @@ static uint32_t mul_sh16_sat(uint32_t a, uint32_t b)
     return hi >> 16 ? 0xFFFFFFFFUL : (hi << 16) | (lo >> 16);
 }
 
+/* v << e and v >> e (e < 32), a byte at a time first: the same value, not an e-step loop */
+static uint32_t shl_bytes(uint32_t v, uint8_t e)
+{
+    for (; e >= 8; e -= 8)
+        v <<= 8;
+    return v << e;
+}
+
+static uint32_t shr_bytes(uint32_t v, uint8_t e)
+{
+    for (; e >= 8; e -= 8)
+        v >>= 8;
+    return v >> e;
+}
+
 /* floor((a0 b0 + a1 b1) / 2^30) of unit vectors (|a|, |b| <= 2^30: |the sum| <= 2^60).  On AVR
  * from the sum's words s = hi 2^32 + lo: floor(s / 2^30) = 4 hi + (lo >> 30) exactly (|hi| <=
  * 2^28: no overflow), not by libgcc's 64-bit shift (a 30-step loop over 8 bytes). */
@@ -134,15 +149,21 @@ static uint32_t junction2(const nnik_pl_block_t *a, const nnik_pl_block_t *b)
     /* r = sin / (1 - sin) = 4 sin (1 + sin) / |w|^2, Q16: floor(S 2^14 / w2) 2^(32 - 2k), S = sin (1 + sin)
      * Q32 (33 bits: sh 2^32 + sl; w2 >= 2^28 when k > 0: the quotient holds 16 bits or more); at most 2^31 - 1 */
     {
-        uint32_t sl = (sn << 16) + nnik_mul16((uint16_t)sn, (uint16_t)sn);
+        uint32_t sl = (sn << 16) + nnik_mul16((uint16_t)sn, (uint16_t)sn), t = sl >> 16, l = sl << 16;
         uint8_t sh = sl < (sn << 16);
-        r = ((uint32_t)sh << 14) | (sl >> 18); /* S 2^14 = r 2^32 + (sl << 14) */
-        r = nnik_div64_32(r, sl << 14, w2); /* r < 2^15 < w2: past the straight-on test |w| > 2^20 (Q30), k >= 6 */
+        /* S 2^14 = r 2^32 + (sl << 14): sl >> 18 = (sl >> 16) >> 2 and sl << 14 = ((sl << 16) >> 2)
+         * with sl's bits 16, 17 on top, by byte moves first (avr-gcc -Os shifts by 14 or 18 in a
+         * loop; the empty asm keeps the byte moves apart) */
+        NNIK_KEEP16(t);
+        NNIK_KEEP16(l);
+        r = (sh ? 0x4000UL : 0) | (t >> 2);
+        l = (l >> 2) | ((uint32_t)(uint8_t)((uint8_t)t << 6) << 24);
+        r = nnik_div64_32(r, l, w2); /* r < 2^15 < w2: past the straight-on test |w| > 2^20 (Q30), k >= 6 */
         if (k < 16) {
             e = (uint8_t)(32 - 2 * k);
-            r = r > (0x7FFFFFFFUL >> e) ? 0x7FFFFFFFUL : r << e;
+            r = r > shr_bytes(0x7FFFFFFFUL, e) ? 0x7FFFFFFFUL : shl_bytes(r, e);
         } else
-            r >>= 2 * k - 32;
+            r = shr_bytes(r, (uint8_t)(2 * k - 32));
     }
     return mul_sh16_sat(mul_sat(aj, NNIK_GC_JDEV_UM), r);
 }
@@ -302,12 +323,8 @@ void nnik_pl_push(nnik_plan_t *pl, int32_t x, int32_t y, int32_t feed, uint16_t 
         }
         if (bits < 61)
             f = (uint8_t)((62 - bits) >> 1);
-        for (l2 = f; l2 >= 8; l2 -= 8) { /* << f, a byte at a time first (the same value) */
-            ax <<= 8;
-            ay <<= 8;
-        }
-        ax <<= l2;
-        ay <<= l2;
+        ax = shl_bytes(ax, f);
+        ay = shl_bytes(ay, f);
         top = mul32(ax, ax, &lo);
         top += mul32(ay, ay, &l2);
         lo += l2;
@@ -319,8 +336,8 @@ void nnik_pl_push(nnik_plan_t *pl, int32_t x, int32_t y, int32_t feed, uint16_t 
     b = &pl->q[IDX(pl, pl->count)];
     b->end[0] = x;
     b->end[1] = y;
-    b->len = Lq >> f;
-    b->lfr = (uint16_t)(f >= 16 ? Lq >> (f - 16) : Lq << (16 - f));
+    b->len = shr_bytes(Lq, f);
+    b->lfr = (uint16_t)(f >= 16 ? shr_bytes(Lq, (uint8_t)(f - 16)) : shl_bytes(Lq, (uint8_t)(16 - f)));
     /* (|d| 2^f 2^30) / Lc, |d| 2^f <= Lc; ax << 30 (mod 2^32) is ax's low 2 bits on top, by a
      * byte (avr-gcc -Os shifts by 30 in a 30-step loop) */
     b->u[0] = (int32_t)nnik_div64_32(ax >> 2, (uint32_t)(uint8_t)((uint8_t)ax << 6) << 24, Lc);
