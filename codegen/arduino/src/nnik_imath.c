@@ -86,9 +86,24 @@ uint32_t nnik_div64_32(uint32_t hi, uint32_t lo, uint32_t d)
 #endif
 }
 
+/* v >> 32: on AVR by reading the high word (little-endian), not libgcc's 64-bit shift loop */
+static uint32_t hi32(uint64_t v)
+{
+#if defined(__GNUC__) && defined(__AVR__)
+    union {
+        uint64_t v;
+        uint32_t w[2];
+    } u;
+    u.v = v;
+    return u.w[1];
+#else
+    return (uint32_t)(v >> 32);
+#endif
+}
+
 uint32_t nnik_isqrt64(uint64_t v)
 {
-    return nnik_isqrt_hl((uint32_t)(v >> 32), (uint32_t)v);
+    return nnik_isqrt_hl(hi32(v), (uint32_t)v);
 }
 
 uint32_t nnik_isqrt_hl(uint32_t hi, uint32_t lo)
@@ -155,7 +170,7 @@ int32_t nnik_div_round(int64_t a, uint32_t b)
          * quotient fits 32 bits and nnik_div64_32 gives the same floor(n / 2 b) as the 64-bit
          * division (libgcc's __udivdi3: thousands of cycles on AVR) */
         uint64_t n = 2 * u + b;
-        uint32_t nh = (uint32_t)(n >> 32);
+        uint32_t nh = hi32(n);
         if (b < 0x80000000UL && nh < 2 * b)
             q = (int32_t)nnik_div64_32(nh, (uint32_t)n, 2 * b);
         else
