@@ -125,6 +125,12 @@ static uint32_t junction2(const nnik_pl_block_t *a, const nnik_pl_block_t *b)
     sn = nnik_isqrt32((uint32_t)(Q30 + dot) << 1); /* sin(theta / 2), Q16 */
     hi[0] = uabs32(b->u[0] - a->u[0]) + 4; /* |w_i| + 4 >= the exact w = u2 - u1's (|u| <= 2^30: no overflow) */
     hi[1] = uabs32(b->u[1] - a->u[1]) + 4;
+    for (; (hi[0] | hi[1]) >= 0x800000UL; k += 8) { /* 8 halvings at once, by a byte move: ceil(ceil(x / 2) / 2)
+                                                   * = ceil(x / 4), and while the larger is >= 2^23 the loop
+                                                   * below would run 8 steps at least (it stays >= 2^16) */
+        hi[0] = (hi[0] + 255) >> 8;
+        hi[1] = (hi[1] + 255) >> 8;
+    }
     for (; (hi[0] | hi[1]) >= 0x8000UL; k++) { /* to 15 bits, halving, rounded up */
         hi[0] = (hi[0] + 1) >> 1;
         hi[1] = (hi[1] + 1) >> 1;
