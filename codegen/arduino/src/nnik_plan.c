@@ -79,6 +79,9 @@ static uint32_t mul_sh16_sat(uint32_t a, uint32_t b)
 }
 
 /* v << e and v >> e (e < 32), a byte at a time first: the same value, not an e-step loop */
+#ifdef __GNUC__
+__attribute__((noinline)) /* one copy each: flash */
+#endif
 static uint32_t shl_bytes(uint32_t v, uint8_t e)
 {
     for (; e >= 8; e -= 8)
@@ -86,6 +89,9 @@ static uint32_t shl_bytes(uint32_t v, uint8_t e)
     return v << e;
 }
 
+#ifdef __GNUC__
+__attribute__((noinline)) /* one copy each: flash */
+#endif
 static uint32_t shr_bytes(uint32_t v, uint8_t e)
 {
     for (; e >= 8; e -= 8)
