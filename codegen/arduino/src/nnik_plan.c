@@ -316,11 +316,16 @@ void nnik_pl_push(nnik_plan_t *pl, int32_t x, int32_t y, int32_t feed, uint16_t 
         return;
     { /* m = n 4^f in [2^60, 2^62): sqrt(n) 2^f to 31 bits; f from n's bit length; the components
        * shifted by f, then squared: the same m */
-        uint32_t lo, top = mul32(ax, ax, &lo), l2;
+        uint32_t lo, top = 0, l2;
         uint8_t bits = 0;
-        top += mul32(ay, ay, &l2);
-        lo += l2;
-        top += lo < l2;
+        if ((ax | ay) < 0x8000UL) /* n < 2^31: by 16 x 16 -> 32 products (the same n) */
+            lo = nnik_mul16((uint16_t)ax, (uint16_t)ax) + nnik_mul16((uint16_t)ay, (uint16_t)ay);
+        else {
+            top = mul32(ax, ax, &lo);
+            top += mul32(ay, ay, &l2);
+            lo += l2;
+            top += lo < l2;
+        }
         if (top)
             bits = 32;
         else
