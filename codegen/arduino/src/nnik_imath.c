@@ -50,14 +50,19 @@ uint32_t nnik_isqrt32(uint32_t v)
 #endif
 }
 
-uint32_t nnik_div64_32(uint32_t hi, uint32_t lo, uint32_t d)
+/* n steps of restoring division of hi:lo by d, hi < d: the quotient's bits enter lo from below
+ * as the dividend leaves it; 32 steps give floor((hi 2^32 + lo) / d), and 16 steps with lo's low
+ * half 0 give floor((hi 2^16 + (lo >> 16)) / d) < 2^16 (lo ends as the quotient) */
+#ifdef __GNUC__
+__attribute__((noinline))
+#endif
+static uint32_t div_steps(uint32_t hi, uint32_t lo, uint32_t d, uint8_t n)
 {
 #if defined(__GNUC__) && defined(__AVR__)
     /* The same restoring division as the C below, step for step, in AVR assembly (about half the
      * cycles: avr-gcc moves each 32-bit shift through a temporary).  Per step, hi:lo shifts left
      * one bit; the carry out of hi is the bit `top`; when it is set or hi >= d, d is subtracted
      * (mod 2^32) and the quotient bit enters lo's bottom (0 after the shift, so inc sets it). */
-    uint8_t n = 32;
     __asm__("1:  lsl %A1\n\trol %B1\n\trol %C1\n\trol %D1\n\t"
             "rol %A0\n\trol %B0\n\trol %C0\n\trol %D0\n\t"
             "brcs 2f\n\t"
@@ -72,7 +77,7 @@ uint32_t nnik_div64_32(uint32_t hi, uint32_t lo, uint32_t d)
     return lo;
 #else
     uint8_t i, top;
-    for (i = 0; i < 32; i++) { /* restoring division, one bit a step; hi < d throughout; the
+    for (i = 0; i < n; i++) { /* restoring division, one bit a step; hi < d throughout; the
                                 * quotient's bits enter lo from below as the dividend leaves it */
         top = (uint8_t)((uint8_t)(hi >> 24) >> 7); /* the bit shifted out: the value is then > d */
         hi = (hi << 1) | (uint8_t)((uint8_t)(lo >> 24) >> 7);
@@ -84,6 +89,11 @@ uint32_t nnik_div64_32(uint32_t hi, uint32_t lo, uint32_t d)
     }
     return lo;
 #endif
+}
+
+uint32_t nnik_div64_32(uint32_t hi, uint32_t lo, uint32_t d)
+{
+    return div_steps(hi, lo, d, 32);
 }
 
 /* v >> 32: on AVR by reading the high word (little-endian), not libgcc's 64-bit shift loop */
@@ -163,9 +173,13 @@ int32_t nnik_div_round(int64_t a, uint32_t b)
 {
     uint64_t u = a < 0 ? (uint64_t)(-a) : (uint64_t)a;
     int32_t q;
-    if (u < 0x40000000UL && b < 0x40000000UL) /* the same value by 32-bit division: far cheaper on AVR */
-        q = (int32_t)((2 * (uint32_t)u + b) / (2 * b));
-    else {
+    if (u < 0x40000000UL && b < 0x40000000UL) { /* the same value by 32-bit division: far cheaper on AVR */
+        uint32_t n = 2 * (uint32_t)u + b, d = 2 * b;
+        if ((n >> 16) < d) /* the quotient fits 16 bits: 16 steps of div_steps, half the 32-bit division's */
+            q = (int32_t)div_steps(n >> 16, n << 16, d, 16);
+        else
+            q = (int32_t)(n / d);
+    } else {
         /* n = 2 u + b (mod 2^64, as before); when 2 b < 2^32 and n's high word is below it, the
          * quotient fits 32 bits and nnik_div64_32 gives the same floor(n / 2 b) as the 64-bit
          * division (libgcc's __udivdi3: thousands of cycles on AVR) */

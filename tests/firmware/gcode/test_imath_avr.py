@@ -87,7 +87,7 @@ EDGE_DIV = [(1, 0, 0), (1, 0xFFFFFFFF, 0), ((1 << 32) - 1, 0xFFFFFFFF, (1 << 32)
 
 
 # a / b that fit int32 (both division paths: |a| and b below and above 2^30), and products at the ends
-EDGE_DR = [(0, 1), (1, 2), (-1, 2), (3, 2), (-3, 2), ((1 << 31) - 1, 1), (-(1 << 31) + 1, 1), ((1 << 40) + 7, 1 << 12),
+EDGE_DR = [(0, 1), (65535, 1), (65535 * 2 + 1, 2), (-(1 << 17), 3), ((1 << 29) - 1, 1 << 13), ((1 << 30) - 1, 1), (1, 2), (-1, 2), (3, 2), (-3, 2), ((1 << 31) - 1, 1), (-(1 << 31) + 1, 1), ((1 << 40) + 7, 1 << 12),
            (-(1 << 61), (1 << 31) - 1), ((1 << 62) - 1, (1 << 32) - 1), ((1 << 30) - 1, (1 << 30) - 1),
            (1 << 30, 1 << 30), (-(1 << 30), (1 << 31) + 1), ((1 << 32) * 3 + 5, (1 << 31)), ((1 << 31) * 5 + (1 << 30), 1 << 31)]
 EDGE_MR = [(0, 0), (-1, (1 << 32) - 1), (-(1 << 31), (1 << 32) - 1), ((1 << 31) - 1, (1 << 32) - 1), (65535, 65535),
@@ -100,7 +100,9 @@ def test_div_round_and_mul_r_on_the_chip(avr):
 
 
 @settings(max_examples=8, deadline=None)
-@given(st.lists(st.tuples(st.integers(-(1 << 62), 1 << 62), st.integers(1, (1 << 32) - 1))
+@given(st.lists((st.tuples(st.integers(-(1 << 62), 1 << 62), st.integers(1, (1 << 32) - 1))
+                 | st.tuples(st.integers(-(1 << 30) + 1, (1 << 30) - 1), st.integers(1, (1 << 30) - 1))
+                 | st.tuples(st.integers(-(1 << 24), 1 << 24), st.integers(1, 1 << 12)))
                 .filter(lambda ab: abs(ab[0]) // ab[1] < (1 << 31) - 1), min_size=1, max_size=300),
        st.lists(st.tuples(st.integers(-(1 << 31), (1 << 31) - 1), U32), min_size=1, max_size=300))
 def test_div_round_and_mul_r_random_on_the_chip(avr, drs, mrs):
