@@ -50,13 +50,7 @@ uint32_t nnik_isqrt32(uint32_t v)
 #endif
 }
 
-/* n steps of restoring division of hi:lo by d, hi < d: the quotient's bits enter lo from below
- * as the dividend leaves it; 32 steps give floor((hi 2^32 + lo) / d), and 16 steps with lo's low
- * half 0 give floor((hi 2^16 + (lo >> 16)) / d) < 2^16 (lo ends as the quotient) */
-#ifdef __GNUC__
-__attribute__((noinline))
-#endif
-static uint32_t div_steps(uint32_t hi, uint32_t lo, uint32_t d, uint8_t n)
+uint32_t nnik_div_steps(uint32_t hi, uint32_t lo, uint32_t d, uint8_t n)
 {
 #if defined(__GNUC__) && defined(__AVR__)
     /* The same restoring division as the C below, step for step, in AVR assembly (about half the
@@ -89,11 +83,6 @@ static uint32_t div_steps(uint32_t hi, uint32_t lo, uint32_t d, uint8_t n)
     }
     return lo;
 #endif
-}
-
-uint32_t nnik_div64_32(uint32_t hi, uint32_t lo, uint32_t d)
-{
-    return div_steps(hi, lo, d, 32);
 }
 
 /* v >> 32: on AVR by reading the high word (little-endian), not libgcc's 64-bit shift loop */
@@ -175,8 +164,8 @@ int32_t nnik_div_round(int64_t a, uint32_t b)
     int32_t q;
     if (u < 0x40000000UL && b < 0x40000000UL) { /* the same value by 32-bit division: far cheaper on AVR */
         uint32_t n = 2 * (uint32_t)u + b, d = 2 * b;
-        if ((n >> 16) < d) /* the quotient fits 16 bits: 16 steps of div_steps, half the 32-bit division's */
-            q = (int32_t)div_steps(n >> 16, n << 16, d, 16);
+        if ((n >> 16) < d) /* the quotient fits 16 bits: 16 steps of nnik_div_steps, half the 32-bit division's */
+            q = (int32_t)nnik_div_steps(n >> 16, n << 16, d, 16);
         else
             q = (int32_t)(n / d);
     } else {
