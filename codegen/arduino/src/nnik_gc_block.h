@@ -60,4 +60,10 @@ int32_t nnik_gc_um(const nnik_num_t *n, uint8_t inch);
 
 #define NNIK_GC_SAT 268435456L /* 2^28 */
 
+/* nnik_gc_segments.c: a segment without steps once the planned motion is at rest; a block to the
+ * machine point p (X, Y) through the frame transform and the soft limits into the planner (0, or
+ * the alarm's code) */
+void nnik_gc_rest(nnik_gc_t *g, uint32_t ticks, uint16_t t);
+int8_t nnik_gc_push(nnik_gc_t *g, const int32_t p[2], int32_t feed);
+
 #endif /* NNIK_GC_BLOCK_H */

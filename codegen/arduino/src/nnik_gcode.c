@@ -1,6 +1,7 @@
 /*
  * nnik_gcode.c - see nnik_gcode.h.  The interpreter and the motion it hands to the planner (the
- * engine's start: nnik_gc_init.c; the tool's word: nnik_gc_tool.c);
+ * engine's start: nnik_gc_init.c; the tool's word: nnik_gc_tool.c; the planner's blocks in and
+ * its samples out to the shaper, the IK and the stepper: nnik_gc_segments.c);
  * nnik/firmware/gcode/interpreter.py repeats it bit for bit.  Positions are machine micrometres
  * less the work origin (mp: X, Y and the tool's Z); an absolute target is the value plus the
  * active work offset (G54..G59 by G10), the G92 offset and for Z the tool length offset; G53
@@ -13,17 +14,8 @@
 #include "nnik_gcode_config.h"
 #include "nnik_imath.h"
 
-#if NNIK_GC_TICK_HZ > 12000
-#error "NNIK_GC_TICK_HZ above 12 kHz overflows the 32-bit tick count"
-#endif
 #ifndef NNIK_GC_MARLIN
 #define NNIK_GC_MARLIN 0
-#endif
-#ifndef NNIK_GC_FRAME
-#define NNIK_GC_FRAME 0 /* 1: the job's frame transform (--fit, --scale, --offset) */
-#endif
-#ifndef NNIK_GC_SOFT_LIMITS
-#define NNIK_GC_SOFT_LIMITS 0 /* 1: ALARM:2 on a block end beyond the travel */
 #endif
 #ifndef NNIK_GC_M300_DOWN
 #define NNIK_GC_M300_DOWN 40000L
@@ -31,10 +23,6 @@
 
 #define POS_LIMIT 268435455L /* 2^28 - 1 um */
 #define MIN_FEED 1000L       /* um per minute */
-#define SAMPLE_TICKS (NNIK_GC_TICK_HZ / NNIK_GC_SAMPLE_HZ)
-#if NNIK_GC_TICK_HZ % NNIK_GC_SAMPLE_HZ
-#error "NNIK_GC_SAMPLE_HZ must divide NNIK_GC_TICK_HZ"
-#endif
 #define DWELL_MS_MAX 16777215L
 
 #if defined(__GNUC__)
@@ -43,157 +31,13 @@
 #define NOINLINE
 #endif
 
-/* ---------------------------------------------------------------- segments */
-/* the tool's duty; M4: the power follows the planned speed, duty * min(v, vn) / vn (no
- * division at or above vn: a cruise costs none) */
-static uint8_t m4_duty(uint16_t tool, uint32_t v, uint32_t vn)
-{
-    if ((tool & TOOL_SCALED) && v < vn)
-        return (uint8_t)((uint32_t)(uint8_t)tool * v / vn);
-    return (uint8_t)tool;
-}
-
-static void out_sample(nnik_gc_t *g, const int32_t p[2], uint16_t tool, uint32_t v, uint32_t vn, uint32_t moved)
-{
-    int32_t in[2], out[2], d[2];
-    uint32_t ticks = SAMPLE_TICKS, a;
-#if NNIK_SH_LEN > 0
-    g->sh.t = m4_duty(tool, v, vn);
-    g->sh.moved = moved; /* the tool's progress: the path length moved (nnik_shaper.h) */
-#else
-    (void)moved;
-#endif
-    nnik_sh_step(&g->sh, p, g->pt);
-    in[0] = NNIK_GC_ORIGIN_X_UM + g->pt[0];
-    in[1] = NNIK_GC_ORIGIN_Y_UM + g->pt[1];
-    if (NNIK_GC_IK(in, out))
-        g->clamped++;
-    d[0] = out[0] - g->steps[0];
-    d[1] = out[1] - g->steps[1];
-    a = (uint32_t)nnik_iabs32(d[0]);
-    if (ticks < a)
-        ticks = a;
-    a = (uint32_t)nnik_iabs32(d[1]);
-    if (ticks < a)
-        ticks = a;
-    if (ticks != SAMPLE_TICKS)
-        g->overspeed++;
-#if NNIK_SH_LEN > 0
-    g->duty = g->sh.duty; /* the tool where the shaped head is (nnik_shaper.h) */
-#else
-    g->duty = m4_duty(tool, v, vn);
-#endif
-    g->steps[0] = out[0];
-    g->steps[1] = out[1];
-    g->segments++;
-    g->emit(g, d, ticks);
-}
-
-static void sample(nnik_gc_t *g)
-{
-    nnik_pl_sample_t s;
-    nnik_pl_sample(&g->pl, &s);
-    g->settle = NNIK_SH_LEN;
-    g->tail_tool = s.tool;
-    g->samples++;
-    out_sample(g, s.p, s.tool, s.v, s.vn, s.moved);
-}
-
-#if NNIK_GC_HOLD
-/* the held block into the planner, after the samples the planner owes before it (a push's) */
-static void commit(nnik_gc_t *g)
-{
-    if (!g->pending)
-        return;
-    while (nnik_pl_ready(&g->pl, 0))
-        sample(g);
-    nnik_pl_push(&g->pl, g->pend[0], g->pend[1], g->pend[2], g->pend_tool);
-    g->pending = 0;
-}
-
-uint8_t nnik_gc_ahead(nnik_gc_t *g)
-{
-    if (!g->pending)
-        return 0;
-    if (nnik_pl_ready(&g->pl, 0))
-        sample(g);
-    else
-        commit(g);
-    return 1;
-}
-#else
-#define commit(g) ((void)0)
-#endif
-
-void nnik_gc_flush(nnik_gc_t *g)
-{
-    int32_t p[2];
-    commit(g);
-    while (nnik_pl_ready(&g->pl, 1))
-        sample(g);
-    p[0] = g->pl.start[0];
-    p[1] = g->pl.start[1];
-    while (g->settle) {
-        g->settle--;
-        out_sample(g, p, g->tail_tool, 0, 1, 0);
-    }
-}
-
-/* a segment without steps, once the planned motion is at rest */
-NOINLINE static void rest(nnik_gc_t *g, uint32_t ticks, uint16_t t)
-{
-    int32_t d[2] = {0, 0};
-    nnik_gc_flush(g);
-    g->tool = g->last_tool = t;
-    g->duty = (uint8_t)t;
-    g->segments++;
-    g->emit(g, d, ticks);
-}
-
-/* a block to the machine point p (X, Y): the transform, the soft limits, the planner */
-NOINLINE static int8_t push(nnik_gc_t *g, const int32_t p[2], int32_t feed)
-{
-    int32_t e[2];
-    e[0] = p[0];
-    e[1] = p[1];
-#if NNIK_GC_FRAME
-    e[0] = (int32_t)(((int64_t)p[0] * NNIK_GC_SCALE_Q16 + 32768) >> 16) + NNIK_GC_SHIFT_X_UM;
-    e[1] = (int32_t)(((int64_t)p[1] * NNIK_GC_SCALE_Q16 + 32768) >> 16) + NNIK_GC_SHIFT_Y_UM;
-#endif
-#if NNIK_GC_SOFT_LIMITS
-    if (e[0] < NNIK_GC_MIN_X_UM || e[0] > NNIK_GC_MAX_X_UM || e[1] < NNIK_GC_MIN_Y_UM || e[1] > NNIK_GC_MAX_Y_UM) {
-        g->alarm = 2;
-        return NNIK_GC_ALARM(2);
-    }
-#endif
-    if (g->check)
-        return 0;
-#if NNIK_GC_HOLD
-    commit(g);
-    g->pend[0] = e[0];
-    g->pend[1] = e[1];
-    g->pend[2] = feed;
-    g->pend_tool = g->tool;
-    g->pending = 1;
-    if (!nnik_pl_ready(&g->pl, 0))
-        commit(g); /* else held until the head block is left (nnik_gc_ahead) */
-#else
-    while (nnik_pl_ready(&g->pl, 0))
-        sample(g);
-    nnik_pl_push(&g->pl, e[0], e[1], feed, g->tool);
-#endif
-    g->last_tool = g->tool;
-    g->blocks++;
-    return 0;
-}
-
 /* ---------------------------------------------------------------- moves */
 NOINLINE static int8_t line_to(nnik_gc_t *g, const int32_t t[3], int32_t feed, uint8_t rapid, uint8_t extrude)
 {
     g->mp[2] = t[2];
     g->tool = nnik_gc_move_tool(g, rapid, extrude);
     if (t[0] != g->mp[0] || t[1] != g->mp[1]) {
-        int8_t r = push(g, t, feed);
+        int8_t r = nnik_gc_push(g, t, feed);
         if (r)
             return r;
         g->mp[0] = t[0];
@@ -522,7 +366,7 @@ int8_t nnik_gc_exec(nnik_gc_t *g)
         uint32_t ms = (uint32_t)dwell_ms;
         uint32_t t = ms / 1000 * NNIK_GC_TICK_HZ + ms % 1000 * NNIK_GC_TICK_HZ / 1000;
         if (t && !g->check)
-            rest(g, t, nnik_gc_idle_tool(g));
+            nnik_gc_rest(g, t, nnik_gc_idle_tool(g));
 #if NNIK_GC_WCS
     } else if (nm == NM_G10) {
         uint8_t p = V(W_P)->ip ? (uint8_t)(V(W_P)->ip - 1) : g->wcs;
@@ -591,7 +435,7 @@ int8_t nnik_gc_exec(nnik_gc_t *g)
                     g->tool = nnik_gc_move_tool(g, 0, extrude);
                 }
                 if (p[0] != g->mp[0] || p[1] != g->mp[1]) {
-                    r = push(g, p, f);
+                    r = nnik_gc_push(g, p, f);
                     g->mp[0] = p[0];
                     g->mp[1] = p[1];
                 }
@@ -621,7 +465,7 @@ int8_t nnik_gc_exec(nnik_gc_t *g)
     seg_blocks = g->blocks != blk0;
     if ((end_tool || end_stop == 2 || end_stop == 30) && !seg_blocks &&
         g->last_tool != nnik_gc_idle_tool(g) && (NNIK_GC_TOOL == 1 || nnik_gc_move_tool(g, 0, 0) == 0) && !g->check)
-        rest(g, 1, nnik_gc_idle_tool(g));
+        nnik_gc_rest(g, 1, nnik_gc_idle_tool(g));
     if (end_wait || end_stop == 0 || end_stop == 2 || end_stop == 30) {
         if (!g->check)
             nnik_gc_flush(g);

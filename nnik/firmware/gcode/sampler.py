@@ -251,7 +251,7 @@ def _assemble(X, Y, V, B, stops, special, vn_of, tool_of, cfg) -> Arrays:
 
 def run_ops(ops: list[tuple], cfg: MachineConfig) -> Stream:
     """ops: ("push", x, y, feed, tool, index), ("flush",), ("rest", ticks, tool).  The stream
-    as nnik_gcode.c makes it: Planner.sample and Shaper.step rule for rule, run in bulk here
+    as nnik_gc_segments.c makes it: Planner.sample and Shaper.step rule for rule, run in bulk here
     (planner.run_ops_reference is the sample-by-sample loop)."""
     a = run_arrays(ops, cfg)
     pairs = lambda m: list(zip(m[:, 0].tolist(), m[:, 1].tolist()))  # noqa: E731
