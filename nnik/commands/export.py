@@ -60,7 +60,11 @@ def cmd_export(args) -> None:
         lib = export_arduino(out, Path(args.arduino))
         console.print(f"wrote Arduino library {lib['libname']} to {lib['dir']}/ (examples {lib['name']}_selftest with "
                       f"{lib['golden']} golden vectors, {lib['name']}_gcode)")
-        if lib["uno_left_out"]:
+        if not lib["uno_fits"]:
+            console.print("[yellow]warning:[/] the Uno's G-code build does not fit its flash with any choice of "
+                          "options (the IK, the shaper and the planner fill it): build the sketch for the "
+                          "ATmega2560 (Mega), or lower sample_hz / drop the shaper")
+        elif lib["uno_left_out"]:
             console.print(f"the Uno's build leaves out {', '.join(lib['uno_left_out'])} to fit its flash "
                           "(error:20; the Mega's carries every option)")
     print_accuracy(pipeline.load_metrics(out))

@@ -87,7 +87,7 @@ def export_arduino(outdir: Path, libdir: Path, machine: MachineConfig | None = N
     rows = [[int(a), int(b), int(c), int(d), int(f)] for (a, b), (c, d), f in zip(vec.tolist(), out.tolist(), flags.tolist())]
     what, hash_ = model.label()
     libname = f"nnik_{name}"
-    sender, left_out = machine is None, ()
+    sender, left_out, uno_flash = machine is None, (), 0
     machine = machine or _default(scn)
     with staged_folder(final, MARKER, "Arduino library", f"{libname} {VERSION}: written by nnik export --arduino\n") \
             as libdir:
@@ -95,12 +95,12 @@ def export_arduino(outdir: Path, libdir: Path, machine: MachineConfig | None = N
         if sender:  # the Uno's build carries the options that fit its flash (nnik.firmware.uno_fit)
             from nnik.firmware.uno_fit import uno_features
 
-            features, left_out, _ = uno_features(libdir, name, machine)
+            features, left_out, uno_flash = uno_features(libdir, name, machine)
             if left_out:
                 machine = replace(machine, features=features)
                 _write_library(libdir, final, scn, c_dir, machine, ik, rows, what, hash_, libname)
     return {"libname": libname, "dir": str(final), "name": name, "machine": machine, "golden": len(rows),
-            "uno_left_out": list(left_out)}
+            "uno_left_out": list(left_out), "uno_fits": uno_flash != -1}
 
 
 def _default(scn) -> MachineConfig:

@@ -19,7 +19,8 @@ DROPS = ((), ("planes",), ("wcs",), ("planes", "wcs"))  # the cheapest loss firs
 
 
 def uno_features(libdir: Path, name: str, machine) -> tuple[frozenset, tuple[str, ...], int]:
-    """(the options the Uno's sender build carries, those left out, its flash in B; 0: not built)."""
+    """(the options the Uno's sender build carries, those left out, its flash in B; 0: not built;
+    -1: no choice of options fits the Uno, the build is for the ATmega2560)."""
     from nnik.firmware.gcode import chip
     from nnik.targets.toolchain import TargetError
 
@@ -35,4 +36,4 @@ def uno_features(libdir: Path, name: str, machine) -> tuple[frozenset, tuple[str
                     raise
                 continue
             return cfg.features, tuple(d for d in drop if d in machine.features), fw.flash_bytes
-    return frozenset(machine.features), (), 0
+    return frozenset(machine.features), (), -1  # nothing fits: the Uno cannot carry this machine

@@ -39,3 +39,26 @@ def test_the_uno_build_fits_with_the_fewest_options_left_out(corexy_run, shaper,
     assert fw.flash_bytes <= chip.MCUS["atmega2560"].flash_bytes
     header = (tmp_path / "lib" / "src" / "nnik_gcode_config.h").read_text()
     assert all(f"NNIK_GC_{f.upper()} 1  /*" in header for f in FEATURES)
+
+
+def test_a_build_past_the_linkers_region_is_a_does_not_fit_and_the_export_says_so(corexy_run, tmp_path):
+    """Past the Uno's 32 KiB the linker itself refuses (region text overflowed): that is 'does not
+    fit' too, so the Uno fit tries the next choice and, when none fits, reports -1 (the export then
+    warns that the build is for the Mega) instead of a traceback."""
+    require_chip()
+    pipeline.export(corexy_run)
+    cfg = default_machine(load_scenario_of(corexy_run))
+    lib = export_arduino(corexy_run, tmp_path / "lib", cfg)
+    # 8 KiB of constant data the sketch keeps (a real link, made too big on purpose)
+    (tmp_path / "lib" / "src" / "zz_ballast.c").write_text(
+        "#include <avr/pgmspace.h>\n#include <stdint.h>\n"
+        "const uint8_t zz_ballast[8192] PROGMEM = {1};\n"
+        "uint8_t zz_touch(uint16_t i) { return pgm_read_byte(&zz_ballast[i]); }\n")
+    ino = tmp_path / "lib" / "examples" / f"{lib['name']}_gcode" / f"{lib['name']}_gcode.ino"
+    ino.write_text(ino.read_text() + "\nextern \"C\" uint8_t zz_touch(uint16_t i);\n"
+                   "volatile uint8_t zz_sink;\nvoid zz_keep(void) { zz_sink = zz_touch(zz_sink); }\n"
+                   "struct ZzKeep { ZzKeep() { zz_keep(); } } zz_keep_now;\n")
+    with pytest.raises(TargetError, match=r"does not fit the atmega328p: flash over by \d+ B"):
+        chip.build_sketch(tmp_path / "lib", f"{lib['name']}_gcode", tmp_path / "b", cfg.defines())
+    features, left, flash = uno_features(tmp_path / "lib", lib["name"], cfg)
+    assert (features, left, flash) == (frozenset(cfg.features), (), -1)

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import hashlib
 import os
+import re
 import shutil
 from dataclasses import dataclass
 from pathlib import Path
@@ -170,8 +171,15 @@ def build_sketch(libdir: Path, example: str, workdir: Path, defines: dict | None
     jobs += [(src, bdir / f"{src.name}.o", inc) for src in sorted((libdir / "src").glob("*.c"))]
     objs = _compile_all(jobs, bdir, mcu)
     elf = bdir / f"{example}.elf"
-    run([find_tool("avr-gcc"), f"-mmcu={m.name}", "-Os", "-Wl,--gc-sections", "-o", elf, *objs, core, "-lm"],
-        f"link {example}", cwd=bdir, log=bdir / "link.log")
+    try:
+        run([find_tool("avr-gcc"), f"-mmcu={m.name}", "-Os", "-Wl,--gc-sections", "-o", elf, *objs, core, "-lm"],
+            f"link {example}", cwd=bdir, log=bdir / "link.log")
+    except TargetError:
+        over = re.search(r"region .text' overflowed by (\d+) bytes", (bdir / "link.log").read_text(errors="replace"))
+        if over is None:
+            raise
+        raise TargetError(f"{example} does not fit the {mcu}: flash over by {over.group(1)} B beyond the linker's "
+                          f"{m.flash_bytes // 1024 + 1} KiB region (the limit is {m.flash_bytes} B)") from None
     size = elf_sizes(elf, bdir)
     fw = Firmware(elf, size["flash"], size["ram"], mcu)
     if fw.flash_bytes > m.flash_bytes or fw.ram_bytes > m.ram_bytes:
