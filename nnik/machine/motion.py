@@ -38,6 +38,12 @@ MOTION = {
     "shaper": Param("str", default="none", choices=SHAPERS),
     "max_contour_um": Param("float", check=within(0.0, 1e6, open_lo=True, unit=" um"), doc="auto's target"),
 }
+# parsed and checked by nnik.machine.motor_limits (a number or [m1, m2], in the motor's units)
+MOTOR = {
+    "motor_max_speed": Param("pair", doc="each motor's top speed after the IK, its units per s"),
+    "motor_max_accel": Param("pair", doc="each motor's top acceleration after the IK, its units per s^2"),
+}
+assert tuple(MOTOR) == motor_limits.KEYS
 DYNAMICS = {
     "f_hz": Param("pair", required=True, doc="undamped natural frequency per axis, Hz"),
     "zeta": Param("pair", required=True, doc="damping ratio per axis"),
@@ -62,7 +68,7 @@ def validate_motion(motion_raw, dynamics_raw, source: str) -> tuple[dict, dict |
     rest = {k: v for k, v in motion_raw.items() if k not in motor} if isinstance(motion_raw, dict) else motion_raw
     for key in rest if isinstance(rest, dict) else ():
         if key not in MOTION:
-            allowed = ", ".join(sorted((*MOTION, *motor_limits.KEYS)))
+            allowed = ", ".join(sorted((*MOTION, *MOTOR)))
             raise NnikError(f"unknown key (allowed: {allowed})", source, f"[motion] {key}")
     motion = {**validate_table(rest, MOTION, source, "motion"), **motor}
     for key, problem in ranges.motion_problems(**ranges.motion_ints(motion)):

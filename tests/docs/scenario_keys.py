@@ -7,7 +7,7 @@ from nnik.machine import scenario
 from nnik.machine.actuator import SCHEMAS as ACTUATORS
 from nnik.machine.kinematics import KINDS
 from nnik.machine.kinematics.belt import DISTORTION
-from nnik.machine.motion import DYNAMICS, MOTION
+from nnik.machine.motion import DYNAMICS, MOTION, MOTOR
 from nnik.machine.params import Param
 from nnik.machine.servo_params import AXIS, CONTROLLER, IDENTIFIED, SERVO
 from nnik.machine.shaper_table import SHAPER
@@ -15,7 +15,7 @@ from nnik.machine.shaper_table import SHAPER
 TABLES = {
     "workspace": scenario.WORKSPACE, "dataset": scenario.DATASET, "network": scenario.NETWORK,
     "training": scenario.TRAINING, "export": scenario.EXPORT, "target": scenario.TARGET,
-    "tool": scenario.TOOL, "motion": MOTION, "dynamics": DYNAMICS, "shaper": SHAPER,
+    "tool": scenario.TOOL, "motion": {**MOTION, **MOTOR}, "dynamics": DYNAMICS, "shaper": SHAPER,
     "mechanism.distortion": DISTORTION,
     # [servo.y] and [servo.y.identified] take the same keys as X's (the page says so)
     "servo": {k: p for k, p in SERVO.items() if p.kind != "table"},
