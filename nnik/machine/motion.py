@@ -38,12 +38,7 @@ MOTION = {
     "shaper": Param("str", default="none", choices=SHAPERS),
     "max_contour_um": Param("float", check=within(0.0, 1e6, open_lo=True, unit=" um"), doc="auto's target"),
 }
-# parsed and checked by nnik.machine.motor_limits (a number or [m1, m2], in the motor's units)
-MOTOR = {
-    "motor_max_speed": Param("pair", doc="each motor's top speed after the IK, its units per s"),
-    "motor_max_accel": Param("pair", doc="each motor's top acceleration after the IK, its units per s^2"),
-}
-assert tuple(MOTOR) == motor_limits.KEYS
+MOTOR = motor_limits.PARAMS  # parsed and checked by nnik.machine.motor_limits
 DYNAMICS = {
     "f_hz": Param("pair", required=True, doc="undamped natural frequency per axis, Hz"),
     "zeta": Param("pair", required=True, doc="damping ratio per axis"),

@@ -31,8 +31,14 @@ import numpy as np
 
 from nnik.errors import NnikError
 from nnik.machine import ranges
+from nnik.machine.params import Param
 
-KEYS = ("motor_max_speed", "motor_max_accel")
+# the [motion] keys, parsed and checked here (a number or [m1, m2], in the motor's units)
+PARAMS = {
+    "motor_max_speed": Param("pair", doc="each motor's top speed after the IK, its units per s"),
+    "motor_max_accel": Param("pair", doc="each motor's top acceleration after the IK, its units per s^2"),
+}
+KEYS = tuple(PARAMS)
 UNITS = {"stepper": "microsteps", "dac": "mirror degrees", "dc_servo": "encoder counts"}
 GRID = 41
 K_MARGIN = 1.1
