@@ -65,6 +65,11 @@ def main(argv: list[str] | None = None) -> int:
         except KeyboardInterrupt:
             print("nnik: interrupted", file=sys.stderr)
             return 130
+        except Exception as exc:  # a Ctrl-C that a library's clean-up turned into its own error
+            if not _from_an_interrupt(exc):
+                raise
+            print("nnik: interrupted", file=sys.stderr)
+            return 130
         finally:
             release_locks()
     if getattr(args, "json", False):
@@ -72,6 +77,18 @@ def main(argv: list[str] | None = None) -> int:
     for w in {(str(w.message), w.filename, w.lineno): w for w in caught}.values():
         print(warning_line(w), file=sys.stderr)
     return 0
+
+
+def _from_an_interrupt(exc: BaseException) -> bool:
+    """True when a KeyboardInterrupt is in the exception's chain (numpy's zip writer, for one,
+    raises a ValueError while it unwinds from a Ctrl-C)."""
+    seen = set()
+    while exc is not None and id(exc) not in seen:
+        if isinstance(exc, KeyboardInterrupt):
+            return True
+        seen.add(id(exc))
+        exc = exc.__cause__ or exc.__context__
+    return False
 
 
 if __name__ == "__main__":

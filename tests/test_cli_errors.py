@@ -117,3 +117,32 @@ def test_console_script_exit_code(tmp_path):
 def test_evaluate_missing_model(tmp_path, capsys):
     assert main(["evaluate", str(tmp_path)]) == 2
     assert "model not found" in capsys.readouterr().err
+
+
+def test_a_ctrl_c_that_a_library_turned_into_its_own_error_is_an_interrupt(capsys, monkeypatch, tmp_path):
+    """numpy's zip writer answers a Ctrl-C in the middle of np.savez with a ValueError from its
+    clean-up: the command still ends as interrupted (exit 130), without a traceback."""
+    from nnik.commands import mlp_steps
+
+    def save_interrupted(*a, **k):
+        try:
+            raise KeyboardInterrupt
+        finally:
+            raise ValueError("Can't close the ZIP file while there is an open writing handle on it.")
+
+    monkeypatch.setattr(mlp_steps.pipeline, "generate", save_interrupted)
+    rc = main(["generate", str(DATASETS / "galvo_cba2012.toml"), "-o", str(tmp_path / "out")])
+    err = capsys.readouterr().err
+    assert rc == 130, err
+    assert err.strip() == "nnik: interrupted"
+
+
+def test_an_error_without_an_interrupt_behind_it_is_not_hidden(monkeypatch, tmp_path):
+    from nnik.commands import mlp_steps
+
+    def broken(*a, **k):
+        raise ValueError("a bug")
+
+    monkeypatch.setattr(mlp_steps.pipeline, "generate", broken)
+    with pytest.raises(ValueError, match="a bug"):
+        main(["generate", str(DATASETS / "galvo_cba2012.toml"), "-o", str(tmp_path / "out")])
