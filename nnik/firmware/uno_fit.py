@@ -2,8 +2,9 @@
 out what does not fit: UNO_FEATURES less the fewest options, in the order of DROPS, whose build
 fits the ATmega328P's flash. The library's header gives the Mega (ATmega2560) every option.
 
-A shaper's code and a large IK table (corexy_nonlinear's table pick with ZVD at 1 kHz: 32,660 B of 32,256
-with both options) can leave no room for them; what is left out answers error:20, as grbl does for
+A shaper's code and a large IK table (corexy_nonlinear's table pick with ZVD at 1 kHz, say) can leave
+no room for them, or for any option: then nothing fits and the caller says so (docs/firmware.md has
+the measured sizes). What is left out answers error:20, as grbl does for
 what it was built without, and a build may turn it back on with -D (docs/firmware.md: each
 option's flash). Decided by building the sketch (avr-gcc) when the toolchain is there, else the
 options stay as they are.

@@ -61,11 +61,7 @@ def validate_motion(motion_raw, dynamics_raw, source: str) -> tuple[dict, dict |
     """([motion] with defaults, [dynamics] as {"f_hz": (fx, fy), "zeta": (zx, zy)} or None)."""
     motor = motor_limits.parse_keys(motion_raw, source) if isinstance(motion_raw, dict) else {}
     rest = {k: v for k, v in motion_raw.items() if k not in motor} if isinstance(motion_raw, dict) else motion_raw
-    for key in rest if isinstance(rest, dict) else ():
-        if key not in MOTION:
-            allowed = ", ".join(sorted((*MOTION, *MOTOR)))
-            raise NnikError(f"unknown key (allowed: {allowed})", source, f"[motion] {key}")
-    motion = {**validate_table(rest, MOTION, source, "motion"), **motor}
+    motion = {**validate_table(rest, MOTION, source, "motion", also=tuple(MOTOR)), **motor}
     for key, problem in ranges.motion_problems(**ranges.motion_ints(motion)):
         raise NnikError(problem, source, f"[motion] {key}")
     if dynamics_raw is None or dynamics_raw == {}:

@@ -102,15 +102,17 @@ def value_problem(value: Any, p: Param) -> tuple[Any, str | None]:
 
 
 def validate_table(
-    table: Any, schema: dict[str, Param], source: str, section: str, owner: str | None = None
+    table: Any, schema: dict[str, Param], source: str, section: str, owner: str | None = None,
+    also: tuple[str, ...] = (),
 ) -> dict[str, Any]:
-    """Check a TOML table against its schema; returns the values with defaults filled in."""
+    """Check a TOML table against its schema; returns the values with defaults filled in. ``also``
+    names keys that another reader of the same table takes (listed as allowed in the error)."""
     where = f"[{section}]"
     if not isinstance(table, dict):
         raise NnikError(f"expected a table, got {table!r}", source, where)
     for key in table:
         if key not in schema:
-            allowed = ", ".join(sorted(schema))
+            allowed = ", ".join(sorted((*schema, *also)))
             used_by = f" by {owner}" if owner else ""
             raise NnikError(f"unknown key (allowed{used_by}: {allowed})", source, f"{where} {key}")
     out: dict[str, Any] = {}
