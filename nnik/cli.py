@@ -44,6 +44,14 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     try:
+        return _main(argv)
+    except KeyboardInterrupt:  # a second Ctrl-C, or one between the command and its clean-up
+        print("nnik: interrupted", file=sys.stderr)
+        return 130
+
+
+def _main(argv: list[str] | None) -> int:
+    try:
         args = build_parser().parse_args(argv)
     except SystemExit as exc:  # --help (0), or a bad option: the one line was printed (2)
         return exc.code if isinstance(exc.code, int) else 2
