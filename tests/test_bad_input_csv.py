@@ -204,3 +204,11 @@ def test_enough_marks_for_the_network_pass(tmp_path, capsys):
     toml = MEASURED.replace("hidden = [8]", "hidden = [16]")
     scn, out = _setup(tmp_path, (HEADER + "\n".join(MARKS[:68]) + "\n").encode(), toml)
     assert main(["generate", str(scn), "-o", str(out)]) == 0, capsys.readouterr().err
+
+
+def test_a_directory_where_the_csv_should_be(tmp_path, capsys):
+    (tmp_path / "corexy_measured.csv").mkdir()
+    scn, out = write_toml(tmp_path, MEASURED), tmp_path / "out"
+    fails(capsys, ["generate", scn, "-o", out], "corexy_measured.csv", "a directory, not a CSV of measured marks",
+          watch=out)
+    assert not out.exists()

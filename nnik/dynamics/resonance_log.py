@@ -74,6 +74,8 @@ def _rows(lines: list[tuple[int, str]], ncols: int, extra_ok: bool) -> np.ndarra
 
 def read_log(path: str | Path) -> ResonanceLog:
     path = Path(path)
+    if path.is_dir():
+        raise CalibrationError("a directory, not a resonance test log")
     if not path.is_file():
         raise CalibrationError("file not found")
     if path.stat().st_size > MAX_BYTES:

@@ -100,6 +100,7 @@ def bad_logs(tmp_path, rows) -> dict:
                          "negative"),
         "psd columns": (_bad(tmp_path, "pc.csv", "\n".join(psd[:40] + ["50.0,1e3,2e3"] + psd[41:]) + "\n"), "columns"),
         "missing": (tmp_path / "nope.csv", "file not found"),
+        "directory": (tmp_path, "a directory, not a resonance test log"),
     }
 
 

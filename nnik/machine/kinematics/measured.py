@@ -39,6 +39,8 @@ _READ_CACHE: dict = {}  # (path, size, mtime) -> arrays: every stage reloads the
 def read_measurements(path: Path) -> tuple[np.ndarray, np.ndarray]:
     """Read the calibration CSV -> (positions in mm (N, 2), motor commands in actuator units (N, 2))."""
     src = str(path)
+    if path.is_dir():
+        raise NnikError("a directory, not a CSV of measured marks", src)
     if not path.is_file():
         raise NnikError("file not found", src)
     st = path.stat()
