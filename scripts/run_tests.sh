@@ -8,7 +8,7 @@
 # assertion that leans on one trained model's figures fails here, not on a user's machine.
 set -u
 run() {
-  python3 -m pytest -q "$@"
+  python3 -m pytest -q --durations=30 "$@"
   local rc=$?
   if [ "$rc" -eq 5 ]; then
     echo "run_tests: pytest collected no tests" >&2
