@@ -11,7 +11,8 @@ galvo 2-10-2 lerp_mr, -2.75 %), and one with another F would have missed by 27 c
 Here the per-bit costs are measured on the simulator (the shift alone, by two amounts of the
 regime, net of the same harness), kept fixed, and the C path's other coefficients are re-fitted
 to the calibration networks' recorded cycles (their means: the data-dependent coefficients, the
-tanh classes and the clamp hits, keep the values the full fit gave them).
+tanh classes and the clamp hits, and the tanh replacements' calls, which the two-layer C path
+shares, keep the values the full fit gave them).
 
     python3 -m nnik.bench.mlp_cost.c_shifts --profile avr-gcc-O2 [--write]
 """
@@ -45,8 +46,10 @@ SLOPES = {"c:t_sh_n[8_14]": ("nnik_tu_shr(a, {n})", (8, 14)),
           "c:aff_p_n[1_7]": ("as", (3, 7)), "c:aff_p_n[8_15]": ("as", (9, 15)), "c:aff_p_n[16_23]": ("as", (17, 23)),
           "c:aff_gp_n[1_7]": ("as", (3, 7)), "c:aff_gp_n[8_15]": ("as", (9, 15)),
           "c:aff_gp_n[16_23]": ("as", (17, 23))}
-# fitted from how the calibration networks' inputs spread, not from their means: kept as fitted
-DATA_DEPENDENT = ("tanh_class[", "sat_hit", "dac_hit")
+# kept as the full fit gave them: the coefficients fitted from how the calibration networks' inputs
+# spread (not from their means), and the called tanh replacements' costs, which the two-layer C
+# path (c2call) prices with the same keys (fast_features._feature_key)
+KEPT = ("tanh_class[", "sat_hit", "dac_hit", "tanh[")
 _HEADER = ("#include <stdint.h>\n#define NNIK_TB_N_IN 2\n#define NNIK_TB_N_OUT 2\n"
            "int8_t nnik_tb_ik(const int32_t in_um[2], int32_t out[2]);\n")
 _BODY = ("\nint8_t nnik_tb_ik(const int32_t in_um[2], int32_t out[2])\n{{\n"
@@ -54,13 +57,15 @@ _BODY = ("\nint8_t nnik_tb_ik(const int32_t in_um[2], int32_t out[2])\n{{\n"
          "    out[0] = in_um[1] ? (int32_t){expr} : (int32_t)a;\n    out[1] = 0;\n    return 0;\n}}\n")
 
 
-def measure_slopes(profile: str, workdir: Path = WORK_DIR) -> dict[str, float]:
-    """{feature: cycles per bit} of each shift of SLOPES on this profile."""
+def measure_slopes(profile: str, workdir: Path = WORK_DIR, tables: dict | None = None) -> dict[str, float]:
+    """{feature: cycles per bit} of each shift of SLOPES on this profile (tables: the profile's
+    shift tables' cycles; default: those of its calibration file)."""
     from nnik.bench.mlp_cost.measure import run_profile
     from nnik.implementations.mlp.cost.kernels import write_c
     from nnik.implementations.mlp.cost.synthetic import CalSpec, synthetic_model
 
-    tables = json.loads(cal_path(profile).read_text())["shift_tables"]["cycles"]
+    if tables is None:
+        tables = json.loads(cal_path(profile).read_text())["shift_tables"]["cycles"]
     probe = write_c(synthetic_model(CalSpec("galvo", (3,), seed=1, gain=0.3), kernel="fast"), workdir / "probe",
                     kernel="fast").parent
     rng = np.random.default_rng(5)
@@ -120,7 +125,7 @@ def refit(profile: str, slopes: dict[str, float]) -> tuple[dict, dict]:
     coef = dict(kc["cycles"]["coef"])
     rows, y, labels = _network_rows(kc)
     before = np.array([sum(coef.get(k, 0.0) * v for k, v in r.items()) for r in rows])
-    fixed = {k: v for k, v in coef.items() if not k.startswith("c:") or any(s in k for s in DATA_DEPENDENT)}
+    fixed = {k: v for k, v in coef.items() if not k.startswith("c:") or any(s in k for s in KEPT)}
     fixed.update(slopes)
     free_rows = [{k: v for k, v in r.items() if k not in fixed} for r in rows]
     offset = np.array([sum(fixed.get(k, 0.0) * v for k, v in r.items() if k in fixed) for r in rows])
@@ -141,6 +146,7 @@ def write(profile: str, coef: dict, summary: dict) -> None:
     cal = json.loads(path.read_text())
     kc = cal["kernels"]["fast"]
     kc["cycles"]["coef"] = coef
+    # a full calibration keeps these slopes fixed too (calibrate._c_shift_slopes)
     kc["c_shifts"] = {**summary, "command": f"python3 -m nnik.bench.mlp_cost.c_shifts --profile {profile} --write"}
     path.write_text(json.dumps(cal, indent=1) + "\n")
     forget_loaded()
