@@ -1,18 +1,20 @@
 """The AVR C path's constant shifts, priced by what the compiler emits (a calibration step).
 
-The one-layer C path of the fast kernel shifts every tanh input by sh (nnik_tu_shr) and every
-output by F (nnik_out_shr).  The network fit priced each shift regime as a + b * n, with b fitted
-from networks whose n barely varies (the search's int16 networks have sh 16-19, the galvo's
-outputs F 22-24): on avr-gcc -O2 it put b at -3.0 cycles per bit of sh above 16 and +31.8 per bit
-of F above 16, where the code is an asr/ror pair (2 cycles) per bit and a 5-cycle loop step per
-bit.  A network with sh 18 then came out 5 cycles a neuron short (the search check's worst,
-galvo 2-10-2 lerp_mr, -2.75 %), and one with another F would have missed by 27 cycles an output.
+The one-layer C path of the fast kernel shifts every tanh input by sh (nnik_tu_shr), the layer-1
+inputs by K (nnik_shr24_16) and the outputs by F, e and the affine base's P and G - P (nnik_out_shr,
+int32 shifts).  The network fit priced each shift regime as a + b * n, with b fitted from networks
+whose n barely varies (the search's int16 networks have sh 16-19, the galvo's K is 2): on
+avr-gcc -O2 it put b at -3.0 cycles per bit of sh above 16, -38.7 per bit of K and +31.8 per bit of
+a plain output's F in 17-23, where the code is an asr/ror pair (2 cycles) per bit, a 6-cycle and a
+7-cycle loop step.  A network with sh 18 came out 5 cycles a neuron short (the search check's
+worst, galvo 2-10-2 lerp_mr, -2.75 %; a fresh galvo 2-3-2 lerp32 int8 network -3.7 %).
 
-Here the per-bit costs are measured on the simulator (the shift alone, by two amounts of the
-regime, net of the same harness), kept fixed, and the C path's other coefficients are re-fitted
-to the calibration networks' recorded cycles (their means: the data-dependent coefficients, the
-tanh classes and the clamp hits, and the tanh replacements' calls, which the two-layer C path
-shares, keep the values the full fit gave them).
+Here the per-bit costs are measured (the kernel primitives on the simulator: the shift alone by two
+amounts of its regime, net of the same harness; the int32 shifts from the profile's shift tables),
+kept fixed, and the C path's other coefficients are re-fitted to the calibration networks'
+recorded cycles (their means: the data-dependent coefficients, the tanh classes and the clamp
+hits, and the tanh replacements' calls, which the two-layer C path shares, keep the values the
+full fit gave them).  A full calibration keeps the same slopes fixed (calibrate._c_shift_slopes).
 
     python3 -m nnik.bench.mlp_cost.c_shifts --profile avr-gcc-O2 [--write]
 """
