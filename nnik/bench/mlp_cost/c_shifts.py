@@ -6,12 +6,14 @@ int32 shifts).  The network fit priced each shift regime as a + b * n, with b fi
 whose n barely varies (the search's int16 networks have sh 16-19, the galvo's K is 2): on
 avr-gcc -O2 it put b at -3.0 cycles per bit of sh above 16, -38.7 per bit of K and +31.8 per bit of
 a plain output's F in 17-23, where the code is an asr/ror pair (2 cycles) per bit, a 6-cycle and a
-7-cycle loop step.  A network with sh 18 came out 5 cycles a neuron short (the search check's
-worst, galvo 2-10-2 lerp_mr, -2.75 %; a fresh galvo 2-3-2 lerp32 int8 network -3.7 %).
+7-cycle loop step; and it gave the output exponent's regimes constants of -58 to -155 cycles an
+output where the code adds a constant (3 cycles besides the shift).  A network with sh 18 came out
+5 cycles a neuron short (the search check's worst, galvo 2-10-2 lerp_mr, -2.75 %); fresh draws
+missed by -3.7 % (galvo 2-3-2 lerp32 int8) and -3.5 % (dual 2-6-2 lerp_mr4 int8, e = 1).
 
 Here the per-bit costs are measured (the kernel primitives on the simulator: the shift alone by two
-amounts of its regime, net of the same harness; the int32 shifts from the profile's shift tables),
-kept fixed, and the C path's other coefficients are re-fitted to the calibration networks'
+amounts of its regime, net of the same harness; the int32 shifts from the profile's shift tables;
+what a non-zero output exponent adds, whole), kept fixed, and the C path's other coefficients are re-fitted to the calibration networks'
 recorded cycles (their means: the data-dependent coefficients, the tanh classes and the clamp
 hits, and the tanh replacements' calls, which the two-layer C path shares, keep the values the
 full fit gave them).  A full calibration keeps the same slopes fixed (calibrate._c_shift_slopes).
@@ -35,6 +37,13 @@ WORK_DIR = REPO_ROOT / "build" / "estimator_c_shifts"
 # constant, nnik.bench.mlp_cost.measure.measure_shift_tables: "as" x >> n, "sl" x * 2^n) or the
 # kernel primitive itself on the simulator (a C expression of the shift by {n}); and two amounts
 # of its regime between which the code is the same loop or unrolled step
+# the output's exponent e (fastc._output_lines): total = C + (acc >> e), or C + acc * 2^-e, where
+# e = 0 takes acc as it is; what e != 0 adds over that is measured whole (the regime's count
+# feature gets the part that does not grow with e, INTERCEPTS)
+_E_POS = "(int32_t)0x12345678L + nnik_sar32((int32_t)a, {n})"
+_E_NEG = "(int32_t)0x12345678L + (int32_t)a * (int32_t)(1L << {n})"
+INTERCEPTS = {"c:out_e_pos_n[1_7]": "c:out_e_pos[1_7]", "c:out_e_pos_n[8_15]": "c:out_e_pos[8_15]",
+              "c:out_e_neg_n[1_7]": "c:out_e_neg[1_7]"}
 SLOPES = {"c:t_sh_n[8_14]": ("nnik_tu_shr(a, {n})", (8, 14)),
           "c:t_sh_n[17_23]": ("nnik_tu_shr(a, {n})", (17, 21)),
           "c:out_foldF_n[17_23]": ("nnik_out_shr(a, {n})", (17, 23)),
@@ -42,9 +51,9 @@ SLOPES = {"c:t_sh_n[8_14]": ("nnik_tu_shr(a, {n})", (8, 14)),
           "c:input_k_n[1_7]": ("nnik_shr24_16(a, {n})", (1, 7)),
           "c:out_F_n[8_15]": ("as", (9, 15)), "c:out_F_n[17_23]": ("as", (17, 23)),
           "c:out_F_n[24_31]": ("as", (25, 30)),
-          "c:out_e_pos_n[1_7]": ("as", (3, 7)), "c:out_e_pos_n[8_15]": ("as", (9, 15)),
+          "c:out_e_pos_n[1_7]": (_E_POS, (3, 7)), "c:out_e_pos_n[8_15]": (_E_POS, (9, 15)),
           "c:out_e_pos_n[16_23]": ("as", (17, 23)),
-          "c:out_e_neg_n[1_7]": ("sl", (3, 7)), "c:out_e_neg_n[8_15]": ("sl", (9, 15)),
+          "c:out_e_neg_n[1_7]": (_E_NEG, (3, 7)), "c:out_e_neg_n[8_15]": ("sl", (9, 15)),
           "c:aff_p_n[1_7]": ("as", (3, 7)), "c:aff_p_n[8_15]": ("as", (9, 15)), "c:aff_p_n[16_23]": ("as", (17, 23)),
           "c:aff_gp_n[1_7]": ("as", (3, 7)), "c:aff_gp_n[8_15]": ("as", (9, 15)),
           "c:aff_gp_n[16_23]": ("as", (17, 23))}
@@ -60,7 +69,8 @@ _BODY = ("\nint8_t nnik_tb_ik(const int32_t in_um[2], int32_t out[2])\n{{\n"
 
 
 def measure_slopes(profile: str, workdir: Path = WORK_DIR, tables: dict | None = None) -> dict[str, float]:
-    """{feature: cycles per bit} of each shift of SLOPES on this profile (tables: the profile's
+    """{feature: cycles per bit} of each shift of SLOPES on this profile, and the intercepts of
+    INTERCEPTS (tables: the profile's
     shift tables' cycles; default: those of its calibration file)."""
     from nnik.bench.mlp_cost.measure import run_profile
     from nnik.implementations.mlp.cost.kernels import write_c
@@ -90,6 +100,8 @@ def measure_slopes(profile: str, workdir: Path = WORK_DIR, tables: dict | None =
             cyc = run_profile(profile, d / "nnik_tb.c", "nnik_tb", vec, 2, d / "w")["cycles"].astype(float)
             net.append(cyc[:16].mean() - cyc[16:].mean())
         out[feat] = round(float((net[1] - net[0]) / (hi - lo)), 3)
+        if feat in INTERCEPTS:
+            out[INTERCEPTS[feat]] = round(float(net[0] - out[feat] * lo), 3)
     return out
 
 
