@@ -31,8 +31,9 @@ def _cal(kind: str) -> dict:
     return json.loads(costs._cal_path(kind).read_text())
 
 
-# the targets on which a kind's band must be recorded (the others: on AVR at least)
-CHECKED_ON = {"poly": TARGETS, "poly32": TARGETS}
+# the targets on which a kind's band must be recorded: every kind has an AVR and a PIC18 body
+# (test_every_kind_builds_for_both_chips), so each is checked against simavr and gpsim
+CHECKED_ON = {kind: TARGETS for kind in KINDS}
 OPEN: dict[str, str] = {}  # kind -> why its band is still over 3 % (xfail strict); none open
 
 
@@ -42,12 +43,45 @@ OPEN: dict[str, str] = {}  # kind -> why its band is still over 3 % (xfail stric
 def test_every_claimed_band_is_measured_and_within_3_percent(kind):
     cal = _cal(kind)
     chk = cal["check"]["targets"]
-    assert set(CHECKED_ON.get(kind, ("avr",))) <= set(chk), (kind, sorted(chk))
+    assert set(CHECKED_ON[kind]) <= set(chk), (kind, sorted(chk))
     for t, s in chk.items():
         assert s["band_pct"] == costs.band_of(s["max_abs_pct"]), (kind, t)
         assert s["cases"] >= 3, (kind, t)
         assert stated_band(cal, t) == s["band_pct"]
         assert s["band_pct"] <= GOAL_PCT, (kind, t, s)
+
+
+def test_every_kind_builds_for_both_chips():
+    """Each kind's cost model prices a body of its own on each chip (so each is checked on both)."""
+    cal = {k: _cal(k) for k in KINDS}
+    for kind in ("lut", "hybrid"):
+        assert set(cal[kind]["targets"]) == set(TARGETS), kind
+    p = costs.problem_of(costs.DATASETS / "galvo_cba2012.toml")
+    for kind in KINDS:
+        fam, cfg = costs.draw_config(p, kind, np.random.default_rng(3))
+        impl = costs.fit(p, fam, cfg)
+        for t in TARGETS:
+            e = impl.estimate(t)
+            assert e["cycles"] > 0 and e["cycles_error_pct"] is not None, (kind, t)
+
+
+def test_lut_prices_pic18_sign_tests_by_how_often_they_run():
+    """The lut's PIC18 body corrects a multiply-accumulate when the table difference is negative:
+    a monotone table (corexy) never does, and is priced so; the other blocks by their inputs."""
+    from nnik.implementations.lut import cost as lc
+    from nnik.implementations.lut.c import table_ctx
+
+    p = costs.problem_of(costs.DATASETS / "corexy_nonlinear.toml")
+    impl = costs.fit(p, *costs.draw_config(p, "lut", np.random.default_rng(1)))
+    items = impl.p18_items(table_ctx(impl.problem, impl.table))
+    taken = lc.p18_taken(impl, items)
+    n_blocks = sum(1 for k, ln in items if k == "asm" and ln.startswith("bra ") and "_L" in ln)
+    assert taken is not None and len(taken) == n_blocks and all(0.0 <= x <= 1.0 for x in taken)
+    assert min(taken) == 0.0
+    half, _ = lc.p18_static(items)
+    priced, _ = lc.p18_static(items, taken)
+    assert priced != half
+    assert lc.p18_static(items, [0.5] * n_blocks)[0] != half  # a run block skips its branch: not the half count
 
 
 def test_a_check_states_its_band():
@@ -102,6 +136,18 @@ def test_a_sample_on_gpsim(chips, tmp_path):
     rows = []
     for (label, p), kind in zip(probs.items(), kinds):
         rows += costs.check({label: p}, [kind], ["pic18"], 1, seed=11, workdir=tmp_path, say=lambda m: None)
+    _within_band(rows)
+
+
+@settings(max_examples=1, **SETTINGS)
+@given(seed=st.integers(0, 2**31 - 1))
+def test_lut_on_gpsim_within_its_recorded_pic18_band(chips, tmp_path_factory, seed):
+    """lut prices PIC18's sign tests by how often typical inputs take them (lut.cost.p18_taken):
+    a random machine's estimate states the recorded pic18 band and holds it on gpsim."""
+    wd = tmp_path_factory.mktemp("lut18")
+    rows = costs.check(costs.random_problems(1, seed, wd / "m"), ["lut"], ["pic18"], 1, seed=seed, workdir=wd,
+                       say=lambda m: None)
+    assert rows and all(r["stated_pct"] is not None for r in rows), rows
     _within_band(rows)
 
 

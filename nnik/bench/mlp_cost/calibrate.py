@@ -130,6 +130,17 @@ def _tanh_bench(prof: str, kern: str | None, meas: list[dict], wd: Path, say) ->
     return measure_tanh_classes(prof, variants, wd / "tanh_bench")
 
 
+def _c_shift_slopes(prof: str, kern: str | None, tables: dict, wd: Path, say) -> dict[str, float]:
+    """AVR's fast kernel: the cycles per bit of the C path's constant shifts, measured
+    (nnik.bench.mlp_cost.c_shifts) and kept fixed in the fit; {} elsewhere."""
+    if kern != "fast" or BUILTIN_PROFILES[prof]["target"] != "avr":
+        return {}
+    from nnik.bench.mlp_cost.c_shifts import measure_slopes
+
+    say(f"[{prof}/fast] the C path's shifts, per bit")
+    return measure_slopes(prof, wd / "c_shifts", tables["cycles"])
+
+
 def _refit_kernel(prof: str, kern: str | None, wd: Path, say) -> tuple[dict, str, str, dict]:
     import pickle
 
@@ -141,8 +152,11 @@ def _refit_kernel(prof: str, kern: str | None, wd: Path, say) -> tuple[dict, str
     if "tanh_bench" not in blob:  # measurements kept before the tanh microbenchmark existed
         blob["tanh_bench"] = _tanh_bench(prof, kern, blob["meas"], wd, say)
         path.write_bytes(pickle.dumps(blob))
-    result = fit_measurements(blob["meas"], blob["tables"], kern, tanh_coefs(blob["tanh_bench"]))
+    slopes = blob.get("c_shifts", {})
+    result = fit_measurements(blob["meas"], blob["tables"], kern, {**tanh_coefs(blob["tanh_bench"]), **slopes})
     result["tanh_bench"] = blob["tanh_bench"]
+    if slopes:
+        result["c_shifts"] = {"slopes": slopes}
     cf = result["cycles"]["fit"]
     say(f"[{prof}/{kernel_key(kern)}] refit: cycles max {cf['max_rel_error_pct']:.2f} % of a network's mean")
     return result, blob["meas"][0]["compiler"], blob["meas"][0]["flags"], blob["tables"]
@@ -156,17 +170,20 @@ def _calibrate_kernel(prof: str, kern: str | None, tables: dict, wd: Path, say) 
     h0 = reference_c_hash(kern)
     meas = measure_kernel(prof, kern, wd, say)
     bench = _tanh_bench(prof, kern, meas, wd, say)
+    slopes = _c_shift_slopes(prof, kern, tables, wd, say)
     reference_c_hash.cache_clear()
     if reference_c_hash(kern) != h0:
         raise NnikError(f"{prof}/{kkey}: the code generator changed during the calibration; run it again")
     try:  # kept for refits while developing the cost model (build/, not package data)
         (wd / kkey).mkdir(parents=True, exist_ok=True)
         (wd / kkey / "measurements.pkl").write_bytes(pickle.dumps({"meas": meas, "tables": tables,
-                                                                   "tanh_bench": bench}))
+                                                                   "tanh_bench": bench, "c_shifts": slopes}))
     except (OSError, pickle.PicklingError):
         pass
-    result = fit_measurements(meas, tables, kern, tanh_coefs(bench))
+    result = fit_measurements(meas, tables, kern, {**tanh_coefs(bench), **slopes})
     result["tanh_bench"] = bench
+    if slopes:
+        result["c_shifts"] = {"slopes": slopes}
     result["reference_c_hash"] = h0
     cf, ff, rf = result["cycles"]["fit"], result["flash"]["fit"], result["ram"]["fit"]
     say(f"[{prof}/{kkey}] fit: cycles max residual {cf['max_abs_residual']:.1f} "
