@@ -59,16 +59,18 @@ def read_events(path: Path):
 
 
 def run_harness(exe: Path, elf: Path, lines: list[str], workdir: Path, max_seconds: float, mcu: str,
-                progress: Callable[[int, int], None] | None = None):
+                progress: Callable[[int, int], None] | None = None, rx_bytes: int = 0):
     """Send lines to the firmware (then M400) on simavr; progress(answers so far, its cycle) after
-    each answer.
+    each answer. rx_bytes: character counting within the firmware's receive buffer of that many
+    bytes (chip.rx_buffer_bytes()); 0: send-response, one line in flight.
     Returns chip.ChipRun; a harness that fails, or runs past its wall-clock bound, -> TargetError."""
     job = workdir / "job_lines.txt"
     job.write_bytes("".join(f"{ln}\n" for ln in lines).encode("latin-1"))
     events = workdir / "job_events.bin"
     events.unlink(missing_ok=True)
     err = workdir / "harness.stderr"
-    cmd = [str(exe), "-m", mcu, "-e", str(events), str(elf), str(job), f"{max_seconds:g}"]
+    counting = ["-c", str(rx_bytes)] if rx_bytes else []
+    cmd = [str(exe), "-m", mcu, "-e", str(events), *counting, str(elf), str(job), f"{max_seconds:g}"]
     timeout = 120 + 60 * max_seconds
     replies, idle_cycle, end_cycle, state, answers = [], 0, 0, "missing", 0
     sp_low = ramend = 0
