@@ -195,7 +195,7 @@ def cmd_job(args) -> dict:
         stream = chip.get("stream") or {}
         if stream:
             buf = f" within the {stream['rx_buffer_bytes']}-byte receive buffer" if stream["rx_buffer_bytes"] else ""
-            console.print(f"sender: {stream['protocol']}{buf}")
+            console.print(f"sender: {stream['protocol']}{buf}, lines {stream['lines']} ({stream['bytes_sent']} B)")
         if chip.get("end_s") is not None:
             console.print(f"simulated chip: {chip['segments_started']} segments, idle at {chip['end_s']:.3f} s "
                           f"({chip['motion_s']:.3f} s of motion; the model's {res['seconds']:.3f} s)")

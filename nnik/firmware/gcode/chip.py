@@ -271,19 +271,29 @@ def protocol_bytes(protocol: str) -> int:
     return rx_buffer_bytes() if protocol == "counting" else 0
 
 
+def sent_lines(lines: list[str], protocol: str, clean: bool = True) -> list[str]:
+    """The lines as the protocol's sender sends them: character counting's with whitespace and
+    comments out where the reader reads the same (simrun.sender_line; clean False: as they are),
+    send-response's as they are (grbl's simple_stream.py)."""
+    from nnik.firmware.gcode.simrun import sender_line
+
+    protocol_bytes(protocol)
+    return [sender_line(ln) for ln in lines] if protocol == "counting" and clean else list(lines)
+
+
 def run_firmware(fw: Firmware, lines: list[str], workdir: Path, max_seconds: float, mcu: str | None = None,
-                 progress=None, protocol: str = "send-response") -> ChipRun:
+                 progress=None, protocol: str = "send-response", clean: bool = True) -> ChipRun:
     """Send lines to the firmware on simavr, then M400; the run ends when that is answered (all
     the motion done; state "done"), the firmware halts, crashes or max_seconds pass. mcu: the
     simulated chip (default the one fw was built for); progress(answers so far, the answer's cycle)
     after each answer; protocol: how the lines stream (PROTOCOLS: character counting within the
-    firmware's receive buffer, or send-response, one line in flight)."""
+    firmware's receive buffer, or send-response, one line in flight); clean: sent_lines's."""
     from nnik.firmware.gcode.simrun import run_harness
 
     workdir, elf = _absolute(workdir, fw.elf)
     mcu_of(mcu or fw.mcu)
-    return run_harness(build_harness(workdir), elf, lines, workdir, max_seconds, mcu or fw.mcu, progress,
-                       protocol_bytes(protocol))
+    return run_harness(build_harness(workdir), elf, sent_lines(lines, protocol, clean), workdir, max_seconds,
+                       mcu or fw.mcu, progress, protocol_bytes(protocol))
 
 
 def tool_missing_reason() -> str | None:

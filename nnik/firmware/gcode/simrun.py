@@ -8,6 +8,7 @@ there, with an ETA on a terminal (nnik.progress).
 
 from __future__ import annotations
 
+import re
 import subprocess
 from dataclasses import dataclass
 import threading
@@ -32,6 +33,27 @@ class ChipRun:
     idle_cycle: int = 0  # the motion pin's last fall before the drain answer: the true end; 0: no motion
     tool: np.ndarray | None = None  # (T, 2) int64: cycle, duty of every change of the tool's PWM (D11)
     stack_bytes: int = 0  # the deepest stack seen: RAMEND less the lowest stack pointer
+
+COMMENT_OR_BLANK = re.compile(r"\s|\(.*?\)|;.*")  # grbl's stream.py strips \s and (...); grbl-streamer ';...' too
+
+
+def sender_line(raw: str) -> str:
+    """The line as a character-counting sender sends it (grbl's stream.py, grbl-streamer, UGS,
+    cncjs): its whitespace and comments out, so that they take no room in the firmware's receive
+    buffer (a comment-only or blank line becomes an empty one, still answered) - where the
+    firmware's reader (nnik.firmware.gcode.reader, its model) reads the same; where it would not
+    (a checksum covers the bytes), the line as it is."""
+    from nnik.firmware.gcode.reader import read_line, sendable
+
+    clean = COMMENT_OR_BLANK.sub("", raw)
+    if clean == raw:
+        return raw
+    try:  # the harness sends latin-1 (the job's bytes as read)
+        same = read_line(sendable(clean.encode("latin-1"))) == read_line(sendable(raw.encode("latin-1")))
+    except UnicodeEncodeError:
+        return raw
+    return clean if same else raw
+
 
 EVENT = np.dtype([("cycle", "<u8"), ("tag", "<u4"), ("value", "<i4")])  # struct event in the harness
 

@@ -57,7 +57,7 @@ def test_counting_never_drops_or_reorders_a_byte(firmware, moves):
         sent.append(padded(f"G1 X{x / 1000:.3f} Y{y / 1000:.3f}", width - len(tail), comment) + tail)
     sent.append("M2")
     assert max(len(ln) + 1 for ln in sent) <= chip.rx_buffer_bytes()
-    plan, seg, res = run_both(entry, as_read(sent), protocol="counting", sent=sent)
+    plan, seg, res = run_both(entry, as_read(sent), protocol="counting", sent=sent, clean=False)
     answers = [t for _, t in res.replies if t == "ok" or t.startswith("error:")]
     assert len(answers) == len(plan.replies)
 
@@ -80,7 +80,7 @@ def test_long_and_crlf_lines_stream_whole(firmware):
         lines.append(padded(body, n - 1, "buffer") if k % 3 == 0 else  # with its '\n': exactly the buffer
                      padded(body, 94, "grbl") + "\r" if k % 3 == 1 else  # CRLF
                      padded(body, n + 40, "longer"))
-    plan, seg, res = run_both(entry, as_read(lines), protocol="counting", sent=lines)
+    plan, seg, res = run_both(entry, as_read(lines), protocol="counting", sent=lines, clean=False)
     assert plan.replies == ["ok"] * (len(lines) + 4)
     assert sum(len(ln) + 1 == n for ln in lines) == 4 and sum(len(ln) + 1 > n for ln in lines) == 4
 
