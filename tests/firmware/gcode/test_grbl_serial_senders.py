@@ -53,6 +53,14 @@ def check_against_model(entry, uno: PtyChip) -> tuple:
     return plan, seg
 
 
+def stuck(uno: PtyChip, g, events: list) -> str:
+    """What a sender that never finished was doing: the chip's time, its last events, the bytes it
+    counts in the chip's buffer, the state it last read."""
+    quiet = ("on_stateupdate", "on_rx_buffer_percent", "on_progress_percent", "on_read", "on_log", "on_write")
+    return (f"at {uno.sim_seconds():.2f} s of chip time: {[e for e, _ in events if e not in quiet][-20:]}, "
+            f"counted in flight {g._rx_buffer_fill}, state {g.cmode}")
+
+
 def job_lines(path: Path) -> list[str]:
     """A job's lines as a sender sends them (stripped, the blank ones too)."""
     return [ln.decode("latin-1").strip() for ln in split_lines(path.read_bytes())]
@@ -92,7 +100,7 @@ def test_grbl_streamer_streams_a_job(grbl_firmware, tmp_path):
             assert uno.wait_sim(lambda: any(e == "on_read" and d[0].startswith("[GC:") for e, d in events), 10)
             g.load_file(str(job))
             g.job_run()
-            assert uno.wait_sim(done.is_set, 2 * job_s + 10)
+            assert uno.wait_sim(done.is_set, 2 * job_s + 10), stuck(uno, g, events)
             assert uno.wait_sim(lambda: g.cmode == "Idle" and g.streaming_complete, 10)
             t0 = uno.sim_seconds()
             uno.wait_sim(lambda: uno.sim_seconds() > t0 + 0.5, 1)  # a status report or two more
