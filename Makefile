@@ -53,6 +53,7 @@ bench: setup toolchains
 	$(PYTHON) -m nnik.bench.measured --sweep 8
 	$(PYTHON) -m nnik.bench.search
 	$(PYTHON) -m nnik.bench.motion
+	$(PYTHON) -m nnik.bench.stream_protocols
 	$(PYTHON) -m nnik.bench.lookahead
 	$(PYTHON) -m nnik.bench.seed003
 	$(PYTHON) -m nnik.bench.job_speed

@@ -58,6 +58,10 @@ def register(sub) -> None:
                    help="a dc_servo xy_table's controller (default: the one `nnik run` chose)")
     p.add_argument("--mcu", choices=("atmega328p", "atmega2560"), default="atmega328p",
                    help="the simulated chip: the Uno's atmega328p (default) or the Mega's atmega2560")
+    p.add_argument("--protocol", choices=("counting", "send-response"), default="counting",
+                   help="how the simulated sender streams the lines: counting (grbl's character counting, as grbl "
+                        "senders do: unanswered lines fill the firmware's receive buffer; default) or send-response "
+                        "(the next line only after the previous one's answer)")
     p.set_defaults(func=cmd_job)
 
 
@@ -172,7 +176,7 @@ def cmd_job(args) -> dict:
     res = run_job(out, Path(args.job), seg_um=args.seg_um, use_chip=False if args.no_chip else None,
                   shaper=args.shaper, precompensate=args.precompensate, opts=opts, check=args.check, mcu=args.mcu,
                   scenario=scn, warn=lambda w: print(f"nnik: warning: {w}", file=sys.stderr, flush=True),
-                  model=ModelDir.load(out, st))
+                  model=ModelDir.load(out, st), protocol=args.protocol)
     if args.check:
         print_gcode_summary(res)
         c = res["check"]
@@ -188,6 +192,10 @@ def cmd_job(args) -> dict:
     chip = res["chip"]
     if "not_run" not in chip:
         console.print(f"self-test on simavr: {chip['selftest']}")
+        stream = chip.get("stream") or {}
+        if stream:
+            buf = f" within the {stream['rx_buffer_bytes']}-byte receive buffer" if stream["rx_buffer_bytes"] else ""
+            console.print(f"sender: {stream['protocol']}{buf}, lines {stream['lines']} ({stream['bytes_sent']} B)")
         if chip.get("end_s") is not None:
             console.print(f"simulated chip: {chip['segments_started']} segments, idle at {chip['end_s']:.3f} s "
                           f"({chip['motion_s']:.3f} s of motion; the model's {res['seconds']:.3f} s)")

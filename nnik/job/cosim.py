@@ -65,14 +65,27 @@ def build(model: ModelDir, cfg: MachineConfig, workdir: Path, mcu: str = "atmega
     return BuiltChip(fw, st_line, workdir, mcu)
 
 
-def run(built: BuiltChip, shaped: ShapedJob, seconds: float, progress=None) -> CoSimulated:
+def stream_figures(protocol: str, lines: list[str]) -> dict:
+    """How the lines were streamed: grbl's character counting within the firmware's receive buffer
+    (whitespace and comments out, as grbl senders send them), or send-response (one line in
+    flight, as it is); the bytes sent."""
+    sent = sum(len(ln) + 1 for ln in chip.sent_lines(lines, protocol))
+    if protocol == "counting":
+        return {"protocol": "character counting", "rx_buffer_bytes": chip.rx_buffer_bytes(),
+                "lines": "whitespace and comments out", "bytes_sent": sent}
+    return {"protocol": "send-response", "rx_buffer_bytes": None, "lines": "as they are", "bytes_sent": sent}
+
+
+def run(built: BuiltChip, shaped: ShapedJob, seconds: float, progress=None,
+        protocol: str = "counting") -> CoSimulated:
     """The job on the built firmware on simavr: replies, events, times (seconds: the job's
-    planned time, the simulated-time bound's base)."""
+    planned time, the simulated-time bound's base; protocol: chip.PROTOCOLS, how the lines stream)."""
     from nnik.targets.toolchain import TargetError
 
     fw, cfg = built.fw, shaped.cfg
     try:
-        run = chip.run_firmware(fw, shaped.lines, built.workdir / "build", 2.0 + 1.5 * seconds, progress=progress)
+        run = chip.run_firmware(fw, shaped.lines, built.workdir / "build", 2.0 + 1.5 * seconds, progress=progress,
+                                protocol=protocol)
     except TargetError as exc:
         raise NnikError(f"avr: {exc}") from None
     ram = chip.MCUS[built.mcu].ram_bytes
@@ -81,7 +94,8 @@ def run(built: BuiltChip, shaped: ShapedJob, seconds: float, progress=None) -> C
                         f"{ram} B): a firmware defect, please report it")
     figures = {"selftest": built.selftest, "selftest_pass": built.selftest.startswith("PASS"),
                "flash_bytes": fw.flash_bytes, "ram_bytes": fw.ram_bytes, "stack_bytes": run.stack_bytes,
-               "ram_free_bytes": ram - fw.ram_bytes - run.stack_bytes, "state": run.state,
+               "ram_free_bytes": ram - fw.ram_bytes - run.stack_bytes, "stream": stream_figures(protocol, shaped.lines),
+               "state": run.state,
                "replies": [t for _, t in run.replies if not t.startswith(("nnik ", "Grbl ")) and t],
                "segments_started": int(len(run.marks)), "end_cycle": run.end_cycle, **motion_times(run)}
     return CoSimulated(figures, run, chip_events(run.steps, run.marks, CLOCK_HZ // cfg.tick_hz),

@@ -38,12 +38,14 @@ from nnik.progress import bar
 class OpenLoopJob(JobKind):
     """use_chip None: on the simulated chip when the toolchain is there (mcu: the Uno's
     atmega328p or the Mega's atmega2560); check: parse and plan only (grbl's $C), no IK, no chip,
-    nothing written; warn: called at once with each warning line."""
+    nothing written; warn: called at once with each warning line; protocol: how the chip is sent
+    the lines (chip.PROTOCOLS: grbl's character counting, as grbl senders stream, or send-response)."""
 
     use_chip: bool | None = None
     mcu: str = "atmega328p"
     check: bool = False
     warn: Callable[[str], None] | None = None
+    protocol: str = "counting"
     name = "open loop"
 
     def run(self, model: ModelDir, request: JobRequest) -> dict:
@@ -87,7 +89,7 @@ class OpenLoopJob(JobKind):
                 def progress(_answers: int, cycle: int) -> None:
                     sim.update(max(0.0, min(cycle / CLOCK_HZ, seconds) - sim.n))
 
-                ran = pool.submit(lambda: cosim.run(built.result(), shaped, seconds, progress))
+                ran = pool.submit(lambda: cosim.run(built.result(), shaped, seconds, progress, self.protocol))
             stages.set_postfix_str("plot")
             png = picture(measured, out)
             stages.update(1)
@@ -107,11 +109,11 @@ class OpenLoopJob(JobKind):
 def run_job(outdir: Path, job_path: Path, seg_um: int | None = None, use_chip: bool | None = None,
             shaper: str | None = None, precompensate: bool = False, opts: JobOptions | None = None,
             check: bool = False, mcu: str = "atmega328p", scenario=None, warn=None,
-            model: ModelDir | None = None) -> dict:
+            model: ModelDir | None = None, protocol: str = "counting") -> dict:
     """An open-loop job on OUTDIR (read once here, or given as model): see OpenLoopJob and
     JobRequest. scenario: the machine's [motion], [dynamics] and [tool] (default: the model's, as
     it was trained; `nnik job SCENARIO.toml` gives the TOML's)."""
     model = model if model is not None else ModelDir.load(Path(outdir))
     req = JobRequest(Path(job_path), scenario if scenario is not None else model.scenario, seg_um, shaper,
                      precompensate, opts or JobOptions())
-    return OpenLoopJob(use_chip, mcu, check, warn).run(model, req)
+    return OpenLoopJob(use_chip, mcu, check, warn, protocol).run(model, req)

@@ -20,6 +20,10 @@ static int32_t check_pt[2]; /* where the machine stood when check mode began */
 
 static NNIK_FLASH const char settings[] = NNIK_GRBL_SETTINGS;
 
+#define TEXT_(x) #x
+#define TEXT(x) TEXT_(x)
+#define RX_SIZE_TEXT TEXT(NNIK_GRBL_RX_SIZE)
+
 static void puts_f(const char *s)
 {
     char c;
@@ -341,7 +345,7 @@ static int8_t dollar(const char *l)
     if (l[2] == 0 && c == 'I') {
         PUTS("[VER:1.1h.nnik:" NNIK_GRBL_BUILD "]\n[OPT:V,");
         put_u32(NNIK_PL_N);
-        PUTS(",128]\n");
+        PUTS("," RX_SIZE_TEXT "]\n"); /* the receive buffer, which character-counting senders read */
         return 0;
     }
     if (l[2] == 0 && c == 'N') {

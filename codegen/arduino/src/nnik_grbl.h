@@ -25,7 +25,9 @@
 extern "C" {
 #endif
 
-#define NNIK_GRBL_RX_SIZE 128 /* the receive buffer for character counting, as grbl's */
+/* the receive buffer for character counting, as grbl's (a power of two up to 128: the port's ring
+ * counts in 8 bits); $I reports it, nnik job's sender (chip.rx_buffer_bytes) reads it here */
+#define NNIK_GRBL_RX_SIZE 128
 
 /* realtime requests: the port's receive interrupt sets nnik_grbl_rt[NNIK_RT_...] = 1 (one byte
  * each, so that clearing one never loses another), nnik_grbl_poll() acts on them */

@@ -1,7 +1,7 @@
 /*
  * nnik_simavr_job - run a G-code sketch (examples/NAME_gcode) on a simulated ATmega328P or
- * ATmega2560 (simavr, 16 MHz), send it a job over UART0 one line at a time (the next line only
- * after the answer to the previous one, as a G-code sender does) and record, with cycle times:
+ * ATmega2560 (simavr, 16 MHz), send it a job over UART0 as a G-code sender does and record, with
+ * cycle times:
  *
  *   R <cycle> <text>        a line the firmware printed (banner, "ok", "error:...", "[MSG:...]")
  *   D <cycle> <text>        the answer to the drain query sent after the job (DRAIN below);
@@ -19,11 +19,17 @@
  *
  * The sketch drives raw PORTD/PORTB bits, the same port bits on both chips.
  *
- * usage: nnik_simavr_job [-m MCU] [-e EVENTS] FIRMWARE.elf JOB_LINES MAX_SECONDS
- * JOB_LINES holds the lines to send, one per line.  The first line with text the firmware prints
+ * usage: nnik_simavr_job [-m MCU] [-e EVENTS] [-p PROFILE] [-c RX_BYTES] FIRMWARE.elf JOB_LINES MAX_SECONDS
+ * JOB_LINES holds the lines to send, one per line (a '\r' ends one too: the firmware answers it,
+ * so "\r\n" is a line and an empty one).  The first line with text the firmware prints
  * (its banner: "nnik NAME ready", or grbl's "Grbl 1.1h ['$' for help]") starts the job; a line that
- * starts with "ok" or "error:" answers the line sent and the next is sent; any other line is
- * only recorded.  After the answer to the last line the harness sends DRAIN (M400: the sketch
+ * starts with "ok" or "error:" answers the oldest line in flight; any other line is only
+ * recorded.  The streaming protocol (grbl's wiki, "Interfacing with Grbl"):
+ *   send-response (default): one line in flight, the next sent on the answer to the previous;
+ *   -c RX_BYTES, character counting: lines go out while the bytes of the lines not yet answered
+ *   (each with its '\n') stay within RX_BYTES, the firmware's receive buffer, so that the buffer
+ *   never overflows and the next lines wait there while the firmware works; a line longer than
+ *   RX_BYTES goes out alone.  After the answer to the last line the harness sends DRAIN (M400: the sketch
  * answers it once its segment queue is empty and the last step is out), so the run covers all
  * the motion however the job ends; the run ends with the answer to DRAIN, after MAX_SECONDS of
  * simulated time, when the firmware halts (the self-test) or when it crashes.
@@ -69,6 +75,9 @@ static avr_irq_t *uart_in;
 static char *job;             /* all lines, '\n'-terminated */
 static size_t job_len, job_pos, line_end;
 static int n_lines, n_replies, xoff;
+static size_t rx_bytes;       /* -c: the receive buffer's bytes (character counting); 0: send-response */
+static size_t *flight;        /* the lengths of the lines in flight (sent, not yet answered), a ring */
+static size_t n_flight, flight_head, flight_bytes, flight_cap;
 static int pin_state[2][8];   /* [port B, D][bit]: last level seen */
 static char out_line[256];
 static size_t out_len;
@@ -112,15 +121,32 @@ static void pump(void)
         avr_raise_irq(uart_in, (uint8_t)job[job_pos++]);
 }
 
-static void queue_next_line(void)
+/* the next lines the protocol lets out: with none in flight always one; send-response no more,
+ * character counting while the bytes in flight fit the receive buffer */
+static void queue_lines(void)
 {
-    size_t e = job_pos;
-    if (e >= job_len)
-        return;
-    while (e < job_len && job[e] != '\n')
-        e++;
-    line_end = e + 1;
+    while (line_end < job_len) {
+        size_t e = line_end, len;
+        while (e < job_len && job[e] != '\n' && job[e] != '\r') /* the firmware answers either end */
+            e++;
+        len = e + 1 - line_end;
+        if (n_flight && (!rx_bytes || flight_bytes + len > rx_bytes))
+            break;
+        flight[(flight_head + n_flight++) % flight_cap] = len;
+        flight_bytes += len;
+        line_end = e + 1;
+    }
     pump();
+}
+
+/* the answer to the oldest line in flight */
+static void answered(void)
+{
+    if (!n_flight)
+        return;
+    flight_bytes -= flight[flight_head];
+    flight_head = (flight_head + 1) % flight_cap;
+    n_flight--;
 }
 
 static void on_xon(struct avr_irq_t *irq, uint32_t value, void *param)
@@ -160,10 +186,14 @@ static void on_uart(struct avr_irq_t *irq, uint32_t value, void *param)
         printf("R %llu %s\n", (unsigned long long)avr->cycle, out_line);
     if (events)
         fflush(stdout); /* the reader's progress */
-    if (banner || answer) {
-        if (answer)
-            n_replies++;
-        queue_next_line();
+    if (banner) { /* a (re)start: the receive buffer is empty, what was in flight is lost */
+        n_flight = flight_bytes = 0;
+        line_end = job_pos;
+        queue_lines();
+    } else if (answer) {
+        n_replies++;
+        answered();
+        queue_lines();
     }
 }
 
@@ -206,8 +236,16 @@ int main(int argc, char **argv)
     const char *mcu = "atmega328p";
 
     const char *prof_path = NULL;
-    while ((opt = getopt(argc, argv, "m:e:p:")) != -1) {
-        if (opt == 'p') {
+    while ((opt = getopt(argc, argv, "m:e:p:c:")) != -1) {
+        if (opt == 'c') {
+            char *end;
+            long n = strtol(optarg, &end, 10);
+            if (*end || n < 1) {
+                fprintf(stderr, "-c wants the receive buffer's bytes, not %s\n", optarg);
+                return 2;
+            }
+            rx_bytes = (size_t)n;
+        } else if (opt == 'p') {
             prof_path = optarg;
             prof = calloc(PROF_WORDS, sizeof *prof);
             if (!prof) {
@@ -228,7 +266,8 @@ int main(int argc, char **argv)
         }
     }
     if (argc - optind != 3) {
-        fprintf(stderr, "usage: %s [-m MCU] [-e EVENTS] [-p PROFILE] FIRMWARE.elf JOB_LINES MAX_SECONDS\n", argv[0]);
+        fprintf(stderr, "usage: %s [-m MCU] [-e EVENTS] [-p PROFILE] [-c RX_BYTES] FIRMWARE.elf JOB_LINES MAX_SECONDS\n",
+                argv[0]);
         return 2;
     }
     argv += optind - 1;
@@ -252,9 +291,15 @@ int main(int argc, char **argv)
     }
     fclose(f);
     for (i = 0; i < (int)job_len; i++)
-        n_lines += job[i] == '\n';
+        n_lines += job[i] == '\n' || job[i] == '\r';
     memcpy(job + job_len, DRAIN, sizeof DRAIN); /* sent after the job's last line */
     job_len += sizeof DRAIN - 1;
+    flight_cap = (size_t)n_lines + 2;
+    flight = malloc(flight_cap * sizeof *flight);
+    if (!flight) {
+        fprintf(stderr, "no memory for %d lines\n", n_lines);
+        return 2;
+    }
     limit = (unsigned long long)(atof(argv[3]) * CLOCK_HZ);
 
     avr = avr_make_mcu_by_name(mcu);

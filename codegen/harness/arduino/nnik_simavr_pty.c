@@ -6,7 +6,9 @@
  * so the sender's timeouts and the firmware's timers agree.
  *
  * usage: nnik_simavr_pty FIRMWARE.elf EVENTS_FILE [MAX_SECONDS [SPEED [LINK]]]
- *   stdout     "PTY /dev/pts/N" once the terminal is open (then nothing more)
+ *   stdout     "PTY /dev/pts/N" once the terminal is open, then "C <cycle>" every 10 ms of wall
+ *              time: the simulated clock, by which a test bounds its waits (a loaded host runs
+ *              the chip slower than wall time)
  *   EVENTS_FILE, with cycle times, as nnik_simavr_job's:
  *     R <cycle> <text>         a line the firmware sent
  *     H <cycle> <text>         a line the host sent (realtime bytes left out)
@@ -187,7 +189,7 @@ int main(int argc, char **argv)
     unsigned long long limit = max_s > 0 ? (unsigned long long)(max_s * CLOCK_HZ) : 0;
     const char *state = "stopped";
     int slave, rc, watch_fd;
-    double reset_at = -1;
+    double reset_at = -1, clock_said = 0;
     int started = 0;
 
     if (argc < 3 || argc > 6) {
@@ -274,6 +276,11 @@ int main(int argc, char **argv)
         if (limit && avr->cycle > limit) {
             state = "timeout";
             break;
+        }
+        if (wall_now() - clock_said >= 0.01) {
+            clock_said = wall_now();
+            printf("C %llu\n", (unsigned long long)avr->cycle);
+            fflush(stdout);
         }
         if (speed > 0) { /* ahead of the wall clock: wait for it */
             double ahead = (double)avr->cycle / CLOCK_HZ / speed - (wall_now() - t0);

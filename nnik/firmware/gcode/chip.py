@@ -250,17 +250,50 @@ def parse_events(text: str) -> ChipRun:
                    end_cycle, state, idle_cycle, np.asarray(tool, dtype=np.int64).reshape(-1, 2))
 
 
+GRBL_HEADER = HARNESS_DIR.parent / "arduino" / "src" / "nnik_grbl.h"
+PROTOCOLS = ("counting", "send-response")  # grbl's streaming protocols (its wiki, "Interfacing with Grbl")
+
+
+def rx_buffer_bytes() -> int:
+    """The firmware's receive buffer (NNIK_GRBL_RX_SIZE in nnik_grbl.h): a character-counting
+    sender keeps at most this many bytes of unanswered lines in flight."""
+    m = re.search(r"^#define NNIK_GRBL_RX_SIZE (\d+)\b", GRBL_HEADER.read_text(), re.M)
+    if m is None:
+        raise TargetError(f"{GRBL_HEADER}: no NNIK_GRBL_RX_SIZE")
+    return int(m.group(1))
+
+
+def protocol_bytes(protocol: str) -> int:
+    """The harness's budget for a streaming protocol: counting -> the receive buffer's bytes,
+    send-response -> 0 (one line in flight)."""
+    if protocol not in PROTOCOLS:
+        raise TargetError(f"unknown streaming protocol {protocol!r}; known: {', '.join(PROTOCOLS)}")
+    return rx_buffer_bytes() if protocol == "counting" else 0
+
+
+def sent_lines(lines: list[str], protocol: str, clean: bool = True) -> list[str]:
+    """The lines as the protocol's sender sends them: character counting's with whitespace and
+    comments out where the reader reads the same (simrun.sender_line; clean False: as they are),
+    send-response's as they are (grbl's simple_stream.py)."""
+    from nnik.firmware.gcode.simrun import sender_line
+
+    protocol_bytes(protocol)
+    return [sender_line(ln) for ln in lines] if protocol == "counting" and clean else list(lines)
+
+
 def run_firmware(fw: Firmware, lines: list[str], workdir: Path, max_seconds: float, mcu: str | None = None,
-                 progress=None) -> ChipRun:
+                 progress=None, protocol: str = "send-response", clean: bool = True) -> ChipRun:
     """Send lines to the firmware on simavr, then M400; the run ends when that is answered (all
     the motion done; state "done"), the firmware halts, crashes or max_seconds pass. mcu: the
     simulated chip (default the one fw was built for); progress(answers so far, the answer's cycle)
-    after each answer."""
+    after each answer; protocol: how the lines stream (PROTOCOLS: character counting within the
+    firmware's receive buffer, or send-response, one line in flight); clean: sent_lines's."""
     from nnik.firmware.gcode.simrun import run_harness
 
     workdir, elf = _absolute(workdir, fw.elf)
     mcu_of(mcu or fw.mcu)
-    return run_harness(build_harness(workdir), elf, lines, workdir, max_seconds, mcu or fw.mcu, progress)
+    return run_harness(build_harness(workdir), elf, sent_lines(lines, protocol, clean), workdir, max_seconds,
+                       mcu or fw.mcu, progress, protocol_bytes(protocol))
 
 
 def tool_missing_reason() -> str | None:

@@ -7,6 +7,8 @@
 
 The harness (codegen/harness/arduino/nnik_simavr_pty.c) holds simulated time to wall time
 (speed 1.0) so that the sender's timeouts and the firmware's agree; speed 2.0 runs twice as fast.
+It cannot run faster than the host allows: on a loaded host the chip's time falls behind the wall
+clock, so a wait on the chip is bounded by its simulated time (sim_seconds, wait_sim).
 """
 
 from __future__ import annotations
@@ -33,6 +35,7 @@ class PtyChip:
         self.run: chip.ChipRun | None = None
         self.host_lines: list[str] = []
         self._proc: subprocess.Popen | None = None
+        self._cycle = 0  # the simulated clock, as the harness last said it
 
     def __enter__(self) -> "PtyChip":
         exe = chip.build_pty_harness(self.workdir)
@@ -41,7 +44,15 @@ class PtyChip:
             args.append(str(self.link))
         self._proc = subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
         lines: queue.Queue = queue.Queue()
-        threading.Thread(target=lambda: [lines.put(ln) for ln in self._proc.stdout], daemon=True).start()
+
+        def read() -> None:
+            for ln in self._proc.stdout:
+                if ln.startswith("C "):
+                    self._cycle = int(ln.split()[1])
+                else:
+                    lines.put(ln)
+
+        threading.Thread(target=read, daemon=True).start()
         line, end = "", time.monotonic() + 30
         while not line.startswith("PTY ") and time.monotonic() < end:  # simavr's own chatter first
             try:
@@ -81,6 +92,22 @@ class PtyChip:
             return int(last[1])
         except (OSError, IndexError, ValueError):
             return 0
+
+    def sim_seconds(self) -> float:
+        """The chip's simulated time so far (the harness says it every 10 ms of wall time)."""
+        return self._cycle / chip.CLOCK_HZ
+
+    def wait_sim(self, pred, sim_seconds: float, wall_cap: float = 1800.0, step: float = 0.02) -> bool:
+        """Poll pred() until true, or until the chip has run sim_seconds of simulated time more
+        (however slowly the host runs it), or the harness ended; wall_cap only guards against a
+        harness that stopped saying its clock."""
+        end_sim = self.sim_seconds() + sim_seconds
+        end_wall = time.monotonic() + wall_cap
+        while self.sim_seconds() < end_sim and time.monotonic() < end_wall and self.alive():
+            if pred():
+                return True
+            time.sleep(step)
+        return bool(pred())
 
     def __exit__(self, *exc) -> None:
         self.stop()

@@ -8,6 +8,7 @@ there, with an ETA on a terminal (nnik.progress).
 
 from __future__ import annotations
 
+import re
 import subprocess
 from dataclasses import dataclass
 import threading
@@ -32,6 +33,27 @@ class ChipRun:
     idle_cycle: int = 0  # the motion pin's last fall before the drain answer: the true end; 0: no motion
     tool: np.ndarray | None = None  # (T, 2) int64: cycle, duty of every change of the tool's PWM (D11)
     stack_bytes: int = 0  # the deepest stack seen: RAMEND less the lowest stack pointer
+
+COMMENT_OR_BLANK = re.compile(r"\s|\(.*?\)|;.*")  # grbl's stream.py strips \s and (...); grbl-streamer ';...' too
+
+
+def sender_line(raw: str) -> str:
+    """The line as a character-counting sender sends it (grbl's stream.py, grbl-streamer, UGS,
+    cncjs): its whitespace and comments out, so that they take no room in the firmware's receive
+    buffer (a comment-only or blank line becomes an empty one, still answered) - where the
+    firmware's reader (nnik.firmware.gcode.reader, its model) reads the same; where it would not
+    (a checksum covers the bytes), the line as it is."""
+    from nnik.firmware.gcode.reader import read_line, sendable
+
+    clean = COMMENT_OR_BLANK.sub("", raw)
+    if clean == raw:
+        return raw
+    try:  # the harness sends latin-1 (the job's bytes as read)
+        same = read_line(sendable(clean.encode("latin-1"))) == read_line(sendable(raw.encode("latin-1")))
+    except UnicodeEncodeError:
+        return raw
+    return clean if same else raw
+
 
 EVENT = np.dtype([("cycle", "<u8"), ("tag", "<u4"), ("value", "<i4")])  # struct event in the harness
 
@@ -59,16 +81,18 @@ def read_events(path: Path):
 
 
 def run_harness(exe: Path, elf: Path, lines: list[str], workdir: Path, max_seconds: float, mcu: str,
-                progress: Callable[[int, int], None] | None = None):
+                progress: Callable[[int, int], None] | None = None, rx_bytes: int = 0):
     """Send lines to the firmware (then M400) on simavr; progress(answers so far, its cycle) after
-    each answer.
+    each answer. rx_bytes: character counting within the firmware's receive buffer of that many
+    bytes (chip.rx_buffer_bytes()); 0: send-response, one line in flight.
     Returns chip.ChipRun; a harness that fails, or runs past its wall-clock bound, -> TargetError."""
     job = workdir / "job_lines.txt"
     job.write_bytes("".join(f"{ln}\n" for ln in lines).encode("latin-1"))
     events = workdir / "job_events.bin"
     events.unlink(missing_ok=True)
     err = workdir / "harness.stderr"
-    cmd = [str(exe), "-m", mcu, "-e", str(events), str(elf), str(job), f"{max_seconds:g}"]
+    counting = ["-c", str(rx_bytes)] if rx_bytes else []
+    cmd = [str(exe), "-m", mcu, "-e", str(events), *counting, str(elf), str(job), f"{max_seconds:g}"]
     timeout = 120 + 60 * max_seconds
     replies, idle_cycle, end_cycle, state, answers = [], 0, 0, "missing", 0
     sp_low = ramend = 0

@@ -121,10 +121,13 @@ def hump_firmware(firmware, tmp_path_factory):
     return run, lib2, fw, ik, work / "build"
 
 
-def run_both(entry, lines: list[str]):
+def run_both(entry, lines: list[str], protocol: str = "send-response", sent: list[str] | None = None,
+             clean: bool = True):
     """The lines through the Python model and the simulated chip: (plan, segments, chip run), with
     the chip's answers, segments and every step checked against the model's, and the run's end
-    checked to fall when the last segment's last tick is over, however the job ends."""
+    checked to fall when the last segment's last tick is over, however the job ends. protocol:
+    how the harness streams them (chip.PROTOCOLS); sent: the chip's lines if not lines (the same
+    lines as the firmware reads them); clean: chip.sent_lines's."""
     from nnik.firmware.gcode.chip import CLOCK_HZ
     from nnik.firmware.gcode.motion import interpret, plan_steps
     from nnik.firmware.gcode.steps import chip_events, chip_tool_events, model_events, model_tool_events
@@ -133,7 +136,8 @@ def run_both(entry, lines: list[str]):
     cfg = lib["machine"]
     plan = interpret(lines, cfg)
     seg = plan_steps(plan, cfg, ik)
-    res = chip.run_firmware(fw, lines, work, 2.0 + 1.5 * seg.ticks.sum() / cfg.tick_hz)
+    res = chip.run_firmware(fw, lines if sent is None else sent, work, 2.0 + 1.5 * seg.ticks.sum() / cfg.tick_hz,
+                            protocol=protocol, clean=clean)
     assert res.state == "done"
     assert 0 < res.stack_bytes and fw.ram_bytes + res.stack_bytes <= chip.RAM_BYTES  # the stack never met the data
     assert [t for _, t in res.replies if not t.startswith(("nnik ", "Grbl ")) and t] == plan.replies

@@ -6,7 +6,6 @@ equal the Python model's (nnik.firmware.gcode.motion) for the lines the chip rec
 from __future__ import annotations
 
 import threading
-import time
 from pathlib import Path
 
 import numpy as np
@@ -14,7 +13,8 @@ import pytest
 
 from nnik.firmware.gcode.chip import CLOCK_HZ
 from nnik.firmware.gcode.motion import interpret, plan_steps
-from nnik.firmware.gcode.pty_chip import PtyChip, wait_until
+from nnik.firmware.gcode.pty_chip import PtyChip
+from nnik.firmware.gcode.reader import split_lines
 from nnik.firmware.gcode.steps import chip_events, model_events
 from tests.firmware.gcode.grbl_pty import grbl_firmware, motor_path, near, tool_on_positions  # noqa: F401
 
@@ -53,6 +53,19 @@ def check_against_model(entry, uno: PtyChip) -> tuple:
     return plan, seg
 
 
+def stuck(uno: PtyChip, g, events: list) -> str:
+    """What a sender that never finished was doing: the chip's time, its last events, the bytes it
+    counts in the chip's buffer, the state it last read."""
+    quiet = ("on_stateupdate", "on_rx_buffer_percent", "on_progress_percent", "on_read", "on_log", "on_write")
+    return (f"at {uno.sim_seconds():.2f} s of chip time: {[e for e, _ in events if e not in quiet][-20:]}, "
+            f"counted in flight {g._rx_buffer_fill}, state {g.cmode}")
+
+
+def job_lines(path: Path) -> list[str]:
+    """A job's lines as a sender sends them (stripped, the blank ones too)."""
+    return [ln.decode("latin-1").strip() for ln in split_lines(path.read_bytes())]
+
+
 def mpos_um(text: str) -> tuple[int, int]:
     x, y = text.split("|MPos:")[1].split("|")[0].split(",")[:2]
     return round(float(x) * 1000), round(float(y) * 1000)
@@ -70,21 +83,27 @@ def test_grbl_streamer_streams_a_job(grbl_firmware, tmp_path):
         elif event == "on_job_completed" and booted.is_set() and any(e == "on_processed_command" for e, _ in events):
             done.set()
 
+    # every wait is bounded in the chip's simulated time, not the wall's: on a loaded host simavr
+    # runs the chip slower than real time (and the sender, paced by the wall, meets a slower
+    # machine); the job's own bound is its planned time, twice, and 10 s
+    _, lib, _, ik, _ = grbl_firmware
+    job_s = plan_steps(interpret(job_lines(job), lib["machine"]), lib["machine"], ik).ticks.sum() / lib["machine"].tick_hz
     with PtyChip(grbl_firmware[2], tmp_path) as uno:
         g = gs.GrblStreamer(callback, name="nnik")
         g.cnect(uno.path, 115200)  # opens the terminal, sends Ctrl-X, waits for the banner
         try:
-            assert booted.wait(15)
+            assert uno.wait_sim(booted.is_set, 15, wall_cap=300)
             g.poll_start()  # '?' every 0.2 s
-            assert wait_until(lambda: g.settings_hash.get("PRB") is not None, 10)  # $# parsed
+            assert uno.wait_sim(lambda: g.settings_hash.get("PRB") is not None, 10)  # $# parsed
             # and its $G: grbl-streamer sends it from its polling thread outside its character
             # count, so a job started before that ok would lose count (as with grbl itself)
-            assert wait_until(lambda: any(e == "on_read" and d[0].startswith("[GC:") for e, d in events), 10)
+            assert uno.wait_sim(lambda: any(e == "on_read" and d[0].startswith("[GC:") for e, d in events), 10)
             g.load_file(str(job))
             g.job_run()
-            assert done.wait(120)
-            assert wait_until(lambda: g.cmode == "Idle" and g.streaming_complete, 60)
-            time.sleep(0.5)
+            assert uno.wait_sim(done.is_set, 2 * job_s + 10), stuck(uno, g, events)
+            assert uno.wait_sim(lambda: g.cmode == "Idle" and g.streaming_complete, 10)
+            t0 = uno.sim_seconds()
+            uno.wait_sim(lambda: uno.sim_seconds() > t0 + 0.5, 1)  # a status report or two more
             final = g.cmpos
         finally:
             g.poll_stop()
