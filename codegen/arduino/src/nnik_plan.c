@@ -465,14 +465,47 @@ static uint8_t can_go(const nnik_plan_t *pl, uint32_t c)
     return can_brake(c, r_um, r_fr, b);
 }
 
-/* floor(u * s / 2^30), |u| <= 2^30, s < 2^29, by 16-bit products (no 64-bit arithmetic) */
-static int32_t mul_q30(int32_t u, uint32_t s)
+/* floor(u * s / 2^30), |u| <= 2^30, s < 2^29 */
+#ifdef __GNUC__
+__attribute__((always_inline)) /* one call site (the loop over the axes): no call, no register saves */
+#endif
+static inline int32_t mul_q30(int32_t u, uint32_t s)
 {
-    uint32_t a = u < 0 ? (uint32_t)0 - (uint32_t)u : (uint32_t)u;
-    uint16_t ah = (uint16_t)(a >> 16), al = (uint16_t)a, sh = (uint16_t)(s >> 16), sl = (uint16_t)s;
-    uint32_t lo = nnik_mul16(al, sl), mid = nnik_mul16(ah, sl) + nnik_mul16(al, sh), hi = nnik_mul16(ah, sh);
-    uint32_t plo = lo + (mid << 16), q;
-    hi += (mid >> 16) + (plo < lo);
+    uint32_t a = u < 0 ? (uint32_t)0 - (uint32_t)u : (uint32_t)u, plo, hi, q;
+#if defined(__GNUC__) && defined(__AVR__) && defined(__AVR_HAVE_MUL__)
+    /* a s = hi 2^32 + plo by the 16 byte products, column by column (byte k of the product gets
+     * every a_i s_j with i + j = k; the three bytes from k up hold the column's sum and carries:
+     * the sum of the columns up to k is below 2^(8k + 19), so nothing carries past byte k + 2) */
+    uint8_t z;
+    __asm__("clr %A0\n\tclr %B0\n\tclr %C0\n\tclr %D0\n\tclr %A1\n\tclr %B1\n\tclr %C1\n\tclr %D1\n\tclr %2\n\t"
+            "mul %A3,%A4\n\tadd %A0,r0\n\tadc %B0,r1\n\tadc %C0,%2\n\t"
+            "mul %A3,%B4\n\tadd %B0,r0\n\tadc %C0,r1\n\tadc %D0,%2\n\t"
+            "mul %B3,%A4\n\tadd %B0,r0\n\tadc %C0,r1\n\tadc %D0,%2\n\t"
+            "mul %A3,%C4\n\tadd %C0,r0\n\tadc %D0,r1\n\tadc %A1,%2\n\t"
+            "mul %B3,%B4\n\tadd %C0,r0\n\tadc %D0,r1\n\tadc %A1,%2\n\t"
+            "mul %C3,%A4\n\tadd %C0,r0\n\tadc %D0,r1\n\tadc %A1,%2\n\t"
+            "mul %A3,%D4\n\tadd %D0,r0\n\tadc %A1,r1\n\tadc %B1,%2\n\t"
+            "mul %B3,%C4\n\tadd %D0,r0\n\tadc %A1,r1\n\tadc %B1,%2\n\t"
+            "mul %C3,%B4\n\tadd %D0,r0\n\tadc %A1,r1\n\tadc %B1,%2\n\t"
+            "mul %D3,%A4\n\tadd %D0,r0\n\tadc %A1,r1\n\tadc %B1,%2\n\t"
+            "mul %B3,%D4\n\tadd %A1,r0\n\tadc %B1,r1\n\tadc %C1,%2\n\t"
+            "mul %C3,%C4\n\tadd %A1,r0\n\tadc %B1,r1\n\tadc %C1,%2\n\t"
+            "mul %D3,%B4\n\tadd %A1,r0\n\tadc %B1,r1\n\tadc %C1,%2\n\t"
+            "mul %C3,%D4\n\tadd %B1,r0\n\tadc %C1,r1\n\tadc %D1,%2\n\t"
+            "mul %D3,%C4\n\tadd %B1,r0\n\tadc %C1,r1\n\tadc %D1,%2\n\t"
+            "mul %D3,%D4\n\tadd %C1,r0\n\tadc %D1,r1\n\t"
+            "clr __zero_reg__"
+            : "=&r"(plo), "=&r"(hi), "=&r"(z)
+            : "r"(a), "r"(s));
+#else
+    {
+        uint16_t ah = (uint16_t)(a >> 16), al = (uint16_t)a, sh = (uint16_t)(s >> 16), sl = (uint16_t)s;
+        uint32_t lo = nnik_mul16(al, sl), mid = nnik_mul16(ah, sl) + nnik_mul16(al, sh);
+        hi = nnik_mul16(ah, sh);
+        plo = lo + (mid << 16);
+        hi += (mid >> 16) + (plo < lo);
+    }
+#endif
     q = (hi << 2) | ((uint8_t)(plo >> 24) >> 6); /* plo >> 30 by its top byte: no 30-step shift loop */
     if (u >= 0)
         return (int32_t)q;
@@ -542,7 +575,8 @@ void nnik_pl_sample(nnik_plan_t *pl, nnik_pl_sample_t *out)
         out->p[1] = b->end[1];
     } else {
         uint32_t s_um = b->len - pl->r_um - (pl->r_fr > b->lfr); /* floor(length - rem) */
-        out->p[0] = pl->start[0] + mul_q30(b->u[0], s_um);
-        out->p[1] = pl->start[1] + mul_q30(b->u[1], s_um);
+        uint8_t i;
+        for (i = 0; i < 2; i++)
+            out->p[i] = pl->start[i] + mul_q30(b->u[i], s_um);
     }
 }

@@ -117,3 +117,39 @@ def test_push_on_the_chip_equals_the_model(chip, walks):
         return
     cfg, got = chip(paths)
     assert got == model(cfg, paths)
+
+
+# nnik_plan.c's mul_q30 (static: the wrapper includes the file) on the chip, with its AVR path
+# (the byte products in assembly), against floor(u s / 2^30), as the model's position
+Q30_WRAP = """#include "nnik_plan.c"
+int8_t q30chk_ik(const int32_t in[2], int32_t out[1])
+{
+    out[0] = mul_q30(in[0], (uint32_t)in[1]);
+    return 0;
+}
+"""
+Q30_EDGES = [(u, s) for u in (0, 1, -1, 1 << 30, -(1 << 30), (1 << 30) - 1, -(1 << 30) + 1, 12345, -12345)
+             for s in (0, 1, (1 << 29) - 1, 1 << 28, 0xFFFF, 0x10000, 77)]
+
+
+@pytest.fixture(scope="module")
+def q30_chip(tmp_path_factory):
+    if find_tool("avr-gcc") is None or find_tool("simavr") is None:
+        pytest.skip("no avr-gcc/simavr")
+    from nnik.targets.avr import run_avr
+    wd = tmp_path_factory.mktemp("mul_q30_avr")
+    (wd / "nnik_gcode_config.h").write_text(header(MachineConfig(origin_um=(0, 0), plan_blocks=N)))
+    (wd / "q30chk.c").write_text(Q30_WRAP)
+
+    def run(pairs):
+        r = run_avr([wd / "q30chk.c", SRC / "nnik_imath.c"], [wd, SRC], "q30chk", np.asarray(pairs, dtype=np.int64),
+                    workdir=wd, n_out=1, progress=False, batch_size=4000)
+        return [int(o[0]) for o in r["outputs"]]
+    return run
+
+
+@settings(max_examples=4, deadline=None)
+@given(st.lists(st.tuples(st.integers(-(1 << 30), 1 << 30), st.integers(0, (1 << 29) - 1)), min_size=1, max_size=300))
+def test_mul_q30_on_the_chip_is_the_floor_of_the_product(q30_chip, pairs):
+    pairs = Q30_EDGES + pairs
+    assert q30_chip(pairs) == [(u * s) >> 30 for u, s in pairs]
