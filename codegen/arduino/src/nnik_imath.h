@@ -35,9 +35,14 @@ uint32_t nnik_isqrt64(uint64_t v);
 /* floor(sqrt(hi 2^32 + lo)): no 64-bit value to build (a 64-bit shift is a loop on AVR) */
 uint32_t nnik_isqrt_hl(uint32_t hi, uint32_t lo);
 
+/* n steps of restoring division of hi:lo by d, hi < d: the quotient's bits enter lo from below
+ * as the dividend leaves it; 32 steps give floor((hi 2^32 + lo) / d), and 16 steps with lo's low
+ * half 0 give floor((hi 2^16 + (lo >> 16)) / d) < 2^16 (lo ends as the quotient) */
+uint32_t nnik_div_steps(uint32_t hi, uint32_t lo, uint32_t d, uint8_t n);
+
 /* floor((hi 2^32 + lo) / d) for hi < d (the quotient fits 32 bits), by 32-bit steps: far
  * cheaper on AVR than a 64-bit division */
-uint32_t nnik_div64_32(uint32_t hi, uint32_t lo, uint32_t d);
+static inline uint32_t nnik_div64_32(uint32_t hi, uint32_t lo, uint32_t d) { return nnik_div_steps(hi, lo, d, 32); }
 
 /* round(a / b) half away from zero, b > 0 (32-bit division where the operands allow) */
 int32_t nnik_div_round(int64_t a, uint32_t b);

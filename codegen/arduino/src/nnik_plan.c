@@ -21,9 +21,19 @@ __attribute__((noinline))
 #endif
 static uint32_t mul32(uint32_t a, uint32_t b, uint32_t *lo)
 {
+#if defined(__GNUC__) && defined(__AVR__)
+    union { /* AVR is little-endian: w[1] is p >> 32, by byte moves (avr-gcc calls a shift loop) */
+        uint64_t p;
+        uint32_t w[2];
+    } v;
+    v.p = (uint64_t)a * b;
+    *lo = v.w[0];
+    return v.w[1];
+#else
     uint64_t p = (uint64_t)a * b;
     *lo = (uint32_t)p;
     return (uint32_t)(p >> 32);
+#endif
 }
 
 /* floor(a * L / n), n > 0, at most 2^32 - 1 (an axis' limit on the block's acceleration) */
@@ -68,11 +78,50 @@ static uint32_t mul_sh16_sat(uint32_t a, uint32_t b)
     return hi >> 16 ? 0xFFFFFFFFUL : (hi << 16) | (lo >> 16);
 }
 
+/* v << e and v >> e (e < 32), a byte at a time first: the same value, not an e-step loop */
+#ifdef __GNUC__
+__attribute__((noinline)) /* one copy each: flash */
+#endif
+static uint32_t shl_bytes(uint32_t v, uint8_t e)
+{
+    for (; e >= 8; e -= 8)
+        v <<= 8;
+    return v << e;
+}
+
+#ifdef __GNUC__
+__attribute__((noinline)) /* one copy each: flash */
+#endif
+static uint32_t shr_bytes(uint32_t v, uint8_t e)
+{
+    for (; e >= 8; e -= 8)
+        v >>= 8;
+    return v >> e;
+}
+
+/* floor((a0 b0 + a1 b1) / 2^30) of unit vectors (|a|, |b| <= 2^30: |the sum| <= 2^60).  On AVR
+ * from the sum's words s = hi 2^32 + lo: floor(s / 2^30) = 4 hi + (lo >> 30) exactly (|hi| <=
+ * 2^28: no overflow), not by libgcc's 64-bit shift (a 30-step loop over 8 bytes). */
+static int32_t q30_dot(const int32_t a[2], const int32_t b[2])
+{
+    int64_t s = (int64_t)a[0] * b[0] + (int64_t)a[1] * b[1];
+#if defined(__GNUC__) && defined(__AVR__)
+    union { /* little-endian */
+        int64_t s;
+        uint32_t w[2];
+    } v;
+    v.s = s;
+    return (int32_t)v.w[1] * 4 + (int32_t)((uint8_t)(v.w[0] >> 24) >> 6);
+#else
+    return (int32_t)(s >> 30);
+#endif
+}
+
 /* the square of the junction's speed limit between blocks a and b (b follows a), Q16, before the
  * feeds' cap (2^32 - 1: straight on); see nnik_plan.h */
 static uint32_t junction2(const nnik_pl_block_t *a, const nnik_pl_block_t *b)
 {
-    int32_t dot = (int32_t)((((int64_t)a->u[0] * b->u[0] + (int64_t)a->u[1] * b->u[1]) >> 30) - NNIK_PL_DOT_MARGIN);
+    int32_t dot = q30_dot(a->u, b->u) - NNIK_PL_DOT_MARGIN;
     uint32_t sn, r, hi[2], wl, w2, aj;
     uint8_t k = 0, e;
     if (dot <= -Q30 + NNIK_PL_REVERSAL)
@@ -82,6 +131,12 @@ static uint32_t junction2(const nnik_pl_block_t *a, const nnik_pl_block_t *b)
     sn = nnik_isqrt32((uint32_t)(Q30 + dot) << 1); /* sin(theta / 2), Q16 */
     hi[0] = uabs32(b->u[0] - a->u[0]) + 4; /* |w_i| + 4 >= the exact w = u2 - u1's (|u| <= 2^30: no overflow) */
     hi[1] = uabs32(b->u[1] - a->u[1]) + 4;
+    for (; (hi[0] | hi[1]) >= 0x800000UL; k += 8) { /* 8 halvings at once, by a byte move: ceil(ceil(x / 2) / 2)
+                                                   * = ceil(x / 4), and while the larger is >= 2^23 the loop
+                                                   * below would run 8 steps at least (it stays >= 2^16) */
+        hi[0] = (hi[0] + 255) >> 8;
+        hi[1] = (hi[1] + 255) >> 8;
+    }
     for (; (hi[0] | hi[1]) >= 0x8000UL; k++) { /* to 15 bits, halving, rounded up */
         hi[0] = (hi[0] + 1) >> 1;
         hi[1] = (hi[1] + 1) >> 1;
@@ -106,15 +161,21 @@ static uint32_t junction2(const nnik_pl_block_t *a, const nnik_pl_block_t *b)
     /* r = sin / (1 - sin) = 4 sin (1 + sin) / |w|^2, Q16: floor(S 2^14 / w2) 2^(32 - 2k), S = sin (1 + sin)
      * Q32 (33 bits: sh 2^32 + sl; w2 >= 2^28 when k > 0: the quotient holds 16 bits or more); at most 2^31 - 1 */
     {
-        uint32_t sl = (sn << 16) + nnik_mul16((uint16_t)sn, (uint16_t)sn);
+        uint32_t sl = (sn << 16) + nnik_mul16((uint16_t)sn, (uint16_t)sn), t = sl >> 16, l = sl << 16;
         uint8_t sh = sl < (sn << 16);
-        r = ((uint32_t)sh << 14) | (sl >> 18); /* S 2^14 = r 2^32 + (sl << 14) */
-        r = nnik_div64_32(r, sl << 14, w2); /* r < 2^15 < w2: past the straight-on test |w| > 2^20 (Q30), k >= 6 */
+        /* S 2^14 = r 2^32 + (sl << 14): sl >> 18 = (sl >> 16) >> 2 and sl << 14 = ((sl << 16) >> 2)
+         * with sl's bits 16, 17 on top, by byte moves first (avr-gcc -Os shifts by 14 or 18 in a
+         * loop; the empty asm keeps the byte moves apart) */
+        NNIK_KEEP16(t);
+        NNIK_KEEP16(l);
+        r = (sh ? 0x4000UL : 0) | (t >> 2);
+        l = (l >> 2) | ((uint32_t)(uint8_t)((uint8_t)t << 6) << 24);
+        r = nnik_div64_32(r, l, w2); /* r < 2^15 < w2: past the straight-on test |w| > 2^20 (Q30), k >= 6 */
         if (k < 16) {
             e = (uint8_t)(32 - 2 * k);
-            r = r > (0x7FFFFFFFUL >> e) ? 0x7FFFFFFFUL : r << e;
+            r = r > shr_bytes(0x7FFFFFFFUL, e) ? 0x7FFFFFFFUL : shl_bytes(r, e);
         } else
-            r >>= 2 * k - 32;
+            r = shr_bytes(r, (uint8_t)(2 * k - 32));
     }
     return mul_sh16_sat(mul_sat(aj, NNIK_GC_JDEV_UM), r);
 }
@@ -255,23 +316,32 @@ void nnik_pl_push(nnik_plan_t *pl, int32_t x, int32_t y, int32_t feed, uint16_t 
         return;
     { /* m = n 4^f in [2^60, 2^62): sqrt(n) 2^f to 31 bits; f from n's bit length; the components
        * shifted by f, then squared: the same m */
-        uint32_t lo, top = mul32(ax, ax, &lo), l2;
+        uint32_t lo, top = 0, l2;
         uint8_t bits = 0;
-        top += mul32(ay, ay, &l2);
-        lo += l2;
-        top += lo < l2;
+        if ((ax | ay) < 0x8000UL) /* n < 2^31: by 16 x 16 -> 32 products (the same n) */
+            lo = nnik_mul16((uint16_t)ax, (uint16_t)ax) + nnik_mul16((uint16_t)ay, (uint16_t)ay);
+        else {
+            top = mul32(ax, ax, &lo);
+            top += mul32(ay, ay, &l2);
+            lo += l2;
+            top += lo < l2;
+        }
         if (top)
             bits = 32;
         else
             top = lo;
+        while (top >> 8) { /* the bit length, a byte at a time first (the same count) */
+            top >>= 8;
+            bits += 8;
+        }
         while (top) {
             top >>= 1;
             bits++;
         }
         if (bits < 61)
             f = (uint8_t)((62 - bits) >> 1);
-        ax <<= f;
-        ay <<= f;
+        ax = shl_bytes(ax, f);
+        ay = shl_bytes(ay, f);
         top = mul32(ax, ax, &lo);
         top += mul32(ay, ay, &l2);
         lo += l2;
@@ -283,10 +353,12 @@ void nnik_pl_push(nnik_plan_t *pl, int32_t x, int32_t y, int32_t feed, uint16_t 
     b = &pl->q[IDX(pl, pl->count)];
     b->end[0] = x;
     b->end[1] = y;
-    b->len = Lq >> f;
-    b->lfr = (uint16_t)(f >= 16 ? Lq >> (f - 16) : Lq << (16 - f));
-    b->u[0] = (int32_t)nnik_div64_32(ax >> 2, ax << 30, Lc); /* (|d| 2^f 2^30) / Lc, |d| 2^f <= Lc */
-    b->u[1] = (int32_t)nnik_div64_32(ay >> 2, ay << 30, Lc);
+    b->len = shr_bytes(Lq, f);
+    b->lfr = (uint16_t)(f >= 16 ? shr_bytes(Lq, (uint8_t)(f - 16)) : shl_bytes(Lq, (uint8_t)(16 - f)));
+    /* (|d| 2^f 2^30) / Lc, |d| 2^f <= Lc; ax << 30 (mod 2^32) is ax's low 2 bits on top, by a
+     * byte (avr-gcc -Os shifts by 30 in a 30-step loop) */
+    b->u[0] = (int32_t)nnik_div64_32(ax >> 2, (uint32_t)(uint8_t)((uint8_t)ax << 6) << 24, Lc);
+    b->u[1] = (int32_t)nnik_div64_32(ay >> 2, (uint32_t)(uint8_t)((uint8_t)ay << 6) << 24, Lc);
     if (dx < 0)
         b->u[0] = -b->u[0];
     if (dy < 0)
@@ -393,14 +465,47 @@ static uint8_t can_go(const nnik_plan_t *pl, uint32_t c)
     return can_brake(c, r_um, r_fr, b);
 }
 
-/* floor(u * s / 2^30), |u| <= 2^30, s < 2^29, by 16-bit products (no 64-bit arithmetic) */
-static int32_t mul_q30(int32_t u, uint32_t s)
+/* floor(u * s / 2^30), |u| <= 2^30, s < 2^29 */
+#ifdef __GNUC__
+__attribute__((always_inline)) /* one call site (the loop over the axes): no call, no register saves */
+#endif
+static inline int32_t mul_q30(int32_t u, uint32_t s)
 {
-    uint32_t a = u < 0 ? (uint32_t)0 - (uint32_t)u : (uint32_t)u;
-    uint16_t ah = (uint16_t)(a >> 16), al = (uint16_t)a, sh = (uint16_t)(s >> 16), sl = (uint16_t)s;
-    uint32_t lo = nnik_mul16(al, sl), mid = nnik_mul16(ah, sl) + nnik_mul16(al, sh), hi = nnik_mul16(ah, sh);
-    uint32_t plo = lo + (mid << 16), q;
-    hi += (mid >> 16) + (plo < lo);
+    uint32_t a = u < 0 ? (uint32_t)0 - (uint32_t)u : (uint32_t)u, plo, hi, q;
+#if defined(__GNUC__) && defined(__AVR__) && defined(__AVR_HAVE_MUL__)
+    /* a s = hi 2^32 + plo by the 16 byte products, column by column (byte k of the product gets
+     * every a_i s_j with i + j = k; the three bytes from k up hold the column's sum and carries:
+     * the sum of the columns up to k is below 2^(8k + 19), so nothing carries past byte k + 2) */
+    uint8_t z;
+    __asm__("clr %A0\n\tclr %B0\n\tclr %C0\n\tclr %D0\n\tclr %A1\n\tclr %B1\n\tclr %C1\n\tclr %D1\n\tclr %2\n\t"
+            "mul %A3,%A4\n\tadd %A0,r0\n\tadc %B0,r1\n\tadc %C0,%2\n\t"
+            "mul %A3,%B4\n\tadd %B0,r0\n\tadc %C0,r1\n\tadc %D0,%2\n\t"
+            "mul %B3,%A4\n\tadd %B0,r0\n\tadc %C0,r1\n\tadc %D0,%2\n\t"
+            "mul %A3,%C4\n\tadd %C0,r0\n\tadc %D0,r1\n\tadc %A1,%2\n\t"
+            "mul %B3,%B4\n\tadd %C0,r0\n\tadc %D0,r1\n\tadc %A1,%2\n\t"
+            "mul %C3,%A4\n\tadd %C0,r0\n\tadc %D0,r1\n\tadc %A1,%2\n\t"
+            "mul %A3,%D4\n\tadd %D0,r0\n\tadc %A1,r1\n\tadc %B1,%2\n\t"
+            "mul %B3,%C4\n\tadd %D0,r0\n\tadc %A1,r1\n\tadc %B1,%2\n\t"
+            "mul %C3,%B4\n\tadd %D0,r0\n\tadc %A1,r1\n\tadc %B1,%2\n\t"
+            "mul %D3,%A4\n\tadd %D0,r0\n\tadc %A1,r1\n\tadc %B1,%2\n\t"
+            "mul %B3,%D4\n\tadd %A1,r0\n\tadc %B1,r1\n\tadc %C1,%2\n\t"
+            "mul %C3,%C4\n\tadd %A1,r0\n\tadc %B1,r1\n\tadc %C1,%2\n\t"
+            "mul %D3,%B4\n\tadd %A1,r0\n\tadc %B1,r1\n\tadc %C1,%2\n\t"
+            "mul %C3,%D4\n\tadd %B1,r0\n\tadc %C1,r1\n\tadc %D1,%2\n\t"
+            "mul %D3,%C4\n\tadd %B1,r0\n\tadc %C1,r1\n\tadc %D1,%2\n\t"
+            "mul %D3,%D4\n\tadd %C1,r0\n\tadc %D1,r1\n\t"
+            "clr __zero_reg__"
+            : "=&r"(plo), "=&r"(hi), "=&r"(z)
+            : "r"(a), "r"(s));
+#else
+    {
+        uint16_t ah = (uint16_t)(a >> 16), al = (uint16_t)a, sh = (uint16_t)(s >> 16), sl = (uint16_t)s;
+        uint32_t lo = nnik_mul16(al, sl), mid = nnik_mul16(ah, sl) + nnik_mul16(al, sh);
+        hi = nnik_mul16(ah, sh);
+        plo = lo + (mid << 16);
+        hi += (mid >> 16) + (plo < lo);
+    }
+#endif
     q = (hi << 2) | ((uint8_t)(plo >> 24) >> 6); /* plo >> 30 by its top byte: no 30-step shift loop */
     if (u >= 0)
         return (int32_t)q;
@@ -470,7 +575,8 @@ void nnik_pl_sample(nnik_plan_t *pl, nnik_pl_sample_t *out)
         out->p[1] = b->end[1];
     } else {
         uint32_t s_um = b->len - pl->r_um - (pl->r_fr > b->lfr); /* floor(length - rem) */
-        out->p[0] = pl->start[0] + mul_q30(b->u[0], s_um);
-        out->p[1] = pl->start[1] + mul_q30(b->u[1], s_um);
+        uint8_t i;
+        for (i = 0; i < 2; i++)
+            out->p[i] = pl->start[i] + mul_q30(b->u[i], s_um);
     }
 }

@@ -49,6 +49,12 @@ MCU = "atmega328p"
 FLASH_BYTES = MCUS[MCU].flash_bytes
 RAM_BYTES = MCUS[MCU].ram_bytes
 C_FLAGS = ["-std=gnu11"]
+# the code's size, and no cycle lost (measured with ZVD at 1 kHz on the shipped jobs: the sample
+# loop's cycles fall too): -mrelax (the linker makes each call or jump within reach rcall/rjmp, 2 B
+# and a cycle less), -mstrict-X (X not used as a base pointer with offsets), no moves of loop
+# invariants and no tree loop passes (registers kept free in the loops); about 700 B of the Uno's
+# G-code build
+SIZE_FLAGS = ["-mrelax", "-mstrict-X", "-fno-move-loop-invariants", "-fno-tree-loop-optimize"]
 # Debian's avr-gcc 5.4 <float.h> defines DECIMAL_DIG for C only; WString.cpp needs it in C++
 CXX_FLAGS = ["-std=gnu++11", "-fpermissive", "-fno-exceptions", "-fno-threadsafe-statics",
              "-DDECIMAL_DIG=__DECIMAL_DIG__"]
@@ -63,7 +69,7 @@ def mcu_of(name: str) -> Mcu:
 def common_flags(mcu: str = MCU) -> list[str]:
     m = mcu_of(mcu)
     return [f"-mmcu={m.name}", f"-DF_CPU={CLOCK_HZ}L", "-DARDUINO=10807", f"-D{m.board}", "-DARDUINO_ARCH_AVR",
-            "-Os", "-g0", "-ffunction-sections", "-fdata-sections", "-mcall-prologues", "-Wall"]
+            "-Os", "-g0", "-ffunction-sections", "-fdata-sections", "-mcall-prologues", *SIZE_FLAGS, "-Wall"]
 
 
 COMMON = common_flags(MCU)
@@ -172,7 +178,7 @@ def build_sketch(libdir: Path, example: str, workdir: Path, defines: dict | None
     objs = _compile_all(jobs, bdir, mcu)
     elf = bdir / f"{example}.elf"
     try:
-        run([find_tool("avr-gcc"), f"-mmcu={m.name}", "-Os", "-Wl,--gc-sections", "-o", elf, *objs, core, "-lm"],
+        run([find_tool("avr-gcc"), f"-mmcu={m.name}", "-Os", *SIZE_FLAGS, "-Wl,--gc-sections", "-o", elf, *objs, core, "-lm"],
             f"link {example}", cwd=bdir, log=bdir / "link.log")
     except TargetError:
         over = re.search(r"region .text' overflowed by (\d+) bytes", (bdir / "link.log").read_text(errors="replace"))
