@@ -1,5 +1,5 @@
 """`make bench`, the sender's protocol: every shipped job through `nnik job`'s stages with ZVD at
-1 kHz, galvo_cba2012 on the Uno and corexy_nonlinear on the Mega (each with [dynamics] f_hz 40,
+1 kHz, galvo_cba2012 on the Uno and corexy_nonlinear on the Uno and the Mega (each with [dynamics] f_hz 40,
 zeta 0.1, each job's build with the options its file uses), streamed both ways grbl senders
 stream (grbl's wiki, "Interfacing with Grbl"): character counting within the firmware's receive
 buffer, and send-response. Per job and protocol: the samples the chip computed too late
@@ -23,7 +23,7 @@ from rich.table import Table
 console = Console(highlight=False, width=None if sys.stdout.isatty() else 200)
 DATASETS = Path(__file__).resolve().parents[2] / "datasets"
 OUT = Path("build") / "bench"
-MACHINES = (("galvo_cba2012", "atmega328p"), ("corexy_nonlinear", "atmega2560"))
+MACHINES = (("galvo_cba2012", "atmega328p"), ("corexy_nonlinear", "atmega328p"), ("corexy_nonlinear", "atmega2560"))
 DYNAMICS = {"f_hz": 40.0, "zeta": 0.1}
 # the shipped jobs for these machines (servo_* and xy_table_reference are the DC-servo table's)
 JOBS = ("circle", "fusion360_grbl", "grbl_cam_laser", "inkscape_gcodetools", "l_path", "lasergrbl_raster",
@@ -78,7 +78,7 @@ def run_job_both(model_dir: Path, scn, job: Path, mcu: str) -> dict:
     model = ModelDir.load(model_dir)
     parsed = parse(JobRequest(job, scn, None, "zvd"))
     parsed = replace(parsed, cfg=replace(parsed.cfg, mcu=mcu))
-    out = OUT / "stream_protocols" / scn.name
+    out = OUT / "stream_protocols" / f"{scn.name}-{mcu}"
     out.mkdir(parents=True, exist_ok=True)
     shaped = shape(plan(parsed), model.ik, out)
     measured = measure(sample(shaped, model.ik))
@@ -107,7 +107,7 @@ def main(argv=None) -> int:
         scn = scenario_at_1khz(name)
         for stem in args.jobs or JOBS:
             job = DATASETS / "jobs" / f"{stem}.gcode"
-            key = f"{name}/{job.stem}"
+            key = f"{name}@{mcu}/{job.stem}"
             console.print(f"[dim]{key} ...[/dim]")
             try:
                 results[key] = run_job_both(model_dir, scn, job, mcu)
