@@ -41,11 +41,7 @@ static void out_sample(nnik_gc_t *g, const nnik_pl_sample_t *s)
     int32_t out[2], d[2];
     uint32_t ticks, a;
     uint8_t duty = m4_duty(s->tool, s->v, s->vn);
-#if NNIK_SH_LEN > 0
-    g->sh.t = duty;
-    g->sh.moved = s->moved; /* the tool's progress: the path length moved (nnik_shaper.h) */
-#endif
-    nnik_sh_step(&g->sh, s->p, g->pt);
+    nnik_sh_step(&g->sh, s->p, duty, s->moved, g->pt); /* the tool's progress: the path length moved */
 #if NNIK_GC_ORIGIN_X_UM == 0 && NNIK_GC_ORIGIN_Y_UM == 0
     if (NNIK_GC_IK(g->pt, out)) /* the work origin at the machine's 0: the shaped point as it is */
         g->clamped++;

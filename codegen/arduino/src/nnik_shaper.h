@@ -14,14 +14,14 @@
  * sample + 2 um) < 2^15, so every |W| < 2^15 and |S| < 2^30.  NNIK_SH_LEN 0: no shaper, the samples pass unchanged, no memory.
  *
  * The tool follows the shaped head (nnik/firmware/gcode/tool_shaper.py repeats it).  The plan's
- * progress Q[n] is its path length: the caller sets sh->moved, the sample's distance along the
+ * progress Q[n] is its path length: the caller gives moved, the sample's distance along the
  * commanded path (nnik_pl_sample_t.moved, Q16 um), and Q[n] = floor(sum of moved / 2^NNIK_SH_PSH)
  * (units of 2^(NNIK_SH_PSH - 16) um; sh->fr keeps the part below a unit, so rounding never
  * accumulates; nnik.machine.ranges.progress_shift picks the finest unit, at most 1/4 um, in which
  * a sample's increment fits uint8).  Q goes through axis 0's taps as a third axis: the shaped
  * head's progress is Q[n] - lag[n], lag = -((16384 - sum_i A_i (Q[n] - Q[n - d_i])) >> 15)
- * (every window sum <= 255 * 255 < 2^16, the sum < 2^31).  Sample n gets the planned duty (sh->t,
- * set before the step) of sample m, the first at or after the previous m and n - NNIK_SH_LEN + 1
+ * (every window sum <= 255 * 255 < 2^16, the sum < 2^31).  Sample n gets the planned duty (t,
+ * given with the step) of sample m, the first at or after the previous m and n - NNIK_SH_LEN + 1
  * with Q[m] >= Q[n] - lag[n]: the tool switches when the shaped head reaches the planned switch
  * (sh->duty).  Its memory: the running sum S of Q, the planned duties and progress increments of
  * the last NNIK_SH_LEN samples, the pointer's delay k, m's slot, Q[n] - Q[m] and fr.
@@ -43,24 +43,23 @@ extern "C" {
 
 typedef struct {
     int32_t last[2]; /* p[n-1] */
-#if NNIK_SH_LEN > 0
-    int16_t inc[2][NNIK_SH_LEN];
+#if NNIK_SH_LEN > 0 /* the scalars first, the rings after them: every scalar within an AVR displacement */
     int32_t s[3];            /* sum_i A_i W_i of X, Y and the tool's progress, W_i = p[n] - p[n - d_i] */
-    uint8_t at; /* slot of the next increment */
+    uint32_t fr;             /* the path length moved, Q16 um, not yet a whole unit */
+    uint16_t e;              /* Q[n] - Q[m] */
+    uint8_t at;              /* slot of the next increment */
+    uint8_t k, ms, duty;     /* n - m, m's slot; the tool's duty */
+    int16_t inc[2][NNIK_SH_LEN];
     uint8_t pd[NNIK_SH_LEN]; /* the tool: planned duties */
     uint8_t pq[NNIK_SH_LEN]; /* the tool: the plan's progress per sample, in units */
-    uint32_t fr;             /* the path length moved, Q16 um, not yet a whole unit */
-    uint32_t moved;          /* this sample's path length (Q16 um), set before the step */
-    uint16_t e;              /* Q[n] - Q[m] */
-    uint8_t k, ms, t, duty;  /* n - m, m's slot; this sample's planned duty; the tool's duty */
 #endif
 } nnik_shaper_t;
 
 void nnik_sh_init(nnik_shaper_t *sh, const int32_t p[2]);
 
 /* nnik_sh_step: the shaped point of the next sample p (and with a shaper the tool's sh->duty from
- * sh->t).  Inline: its one caller (the engine's sample, nnik_gc_segments.c) saves and restores its
- * registers once for both. */
+ * t, the sample's planned duty; moved: its path length, Q16 um).  Inline: its one caller (the
+ * engine's sample, nnik_gc_segments.c) saves and restores its registers once for both. */
 #if defined(__GNUC__)
 #define NNIK_SH_INLINE static inline __attribute__((always_inline))
 #else
@@ -84,11 +83,11 @@ void nnik_sh_init(nnik_shaper_t *sh, const int32_t p[2]);
 
 /* the tool of the sample whose slot was just written (its progress dq), the shaped head lag
  * behind in progress */
-NNIK_SH_INLINE void nnik_sh_tool(nnik_shaper_t *sh, uint8_t at, uint16_t dq, uint16_t lag)
+NNIK_SH_INLINE void nnik_sh_tool(nnik_shaper_t *sh, uint8_t at, uint8_t t, uint16_t dq, uint16_t lag)
 {
     uint16_t e = (uint16_t)(sh->e + dq);
     uint8_t k = (uint8_t)(sh->k + 1), j = sh->ms;
-    sh->pd[at] = sh->t;
+    sh->pd[at] = t;
     while (k > NNIK_SH_LEN - 1 || e > lag) { /* m + 1: its progress leaves Q[n] - Q[m] */
         k--;
         j = (uint8_t)(j + 1 == NNIK_SH_LEN ? 0 : j + 1);
@@ -134,7 +133,7 @@ NNIK_SH_INLINE uint16_t nnik_sh_lag(int32_t S)
 #endif
 #endif
 
-NNIK_SH_INLINE void nnik_sh_step(nnik_shaper_t *sh, const int32_t p[2], int32_t out[2])
+NNIK_SH_INLINE void nnik_sh_step(nnik_shaper_t *sh, const int32_t p[2], uint8_t t, uint32_t moved, int32_t out[2])
 {
 #if NNIK_SH_LEN > 0
     static NNIK_FLASH const uint16_t AMPS[2][NNIK_SH_N] = NNIK_SH_AMPS;
@@ -142,7 +141,7 @@ NNIK_SH_INLINE void nnik_sh_step(nnik_shaper_t *sh, const int32_t p[2], int32_t 
     uint8_t at = sh->at, k, dq;
     int32_t s0, s1, s2;
     int16_t dx = (int16_t)(p[0] - sh->last[0]), dy = (int16_t)(p[1] - sh->last[1]);
-    uint32_t fr = sh->fr + sh->moved; /* the path length moved, Q16 um, less whole units taken */
+    uint32_t fr = sh->fr + moved; /* the path length moved, Q16 um, less whole units taken */
     /* this sample's progress in units, fr >> NNIK_SH_PSH (<= 255: nnik.machine.ranges), from
      * fr's bytes: no shift loop */
 #if NNIK_SH_PSH <= 16
@@ -196,10 +195,12 @@ NNIK_SH_INLINE void nnik_sh_step(nnik_shaper_t *sh, const int32_t p[2], int32_t 
     sh->inc[0][at] = dx;
     sh->inc[1][at] = dy;
     sh->pq[at] = dq;
-    nnik_sh_tool(sh, at, dq, nnik_sh_lag(s2));
+    nnik_sh_tool(sh, at, t, dq, nnik_sh_lag(s2));
     sh->at = (uint8_t)(at + 1 == NNIK_SH_LEN ? 0 : at + 1);
 #else
     uint8_t a;
+    (void)t;
+    (void)moved;
     for (a = 0; a < 2; a++) {
         out[a] = p[a];
         sh->last[a] = p[a];
