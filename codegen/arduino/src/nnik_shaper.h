@@ -114,35 +114,22 @@ NNIK_SH_INLINE uint16_t nnik_sh_lag(int32_t S)
 }
 
 /* S += A w (A < 2^16 unsigned, w signed), the sum kept in registers: on AVR the multiplier in
- * place (no call): the four unsigned byte products of A and w's 16 bits, each added at its byte,
- * less A 2^16 when w < 0 (unsigned mul takes any registers: no mulsu's r16..r23); elsewhere in C */
+ * place (no call): Al wl and Ah wl unsigned, wh Al and wh Ah signed by unsigned (mulsu: operands
+ * in r16..r23), each added at its byte; elsewhere in C */
 #if defined(__GNUC__) && defined(__AVR__) && defined(__AVR_HAVE_MUL__)
 #define NNIK_SH_MAC(S, A, w)                                                                             \
     do {                                                                                                 \
         uint8_t z_;                                                                                      \
         __asm__("clr %[z]\n\tmul %A[a], %A[w]\n\tadd %A[s], r0\n\tadc %B[s], r1\n\tadc %C[s], %[z]\n\t" \
                 "adc %D[s], %[z]\n\tmul %B[a], %A[w]\n\tadd %B[s], r0\n\tadc %C[s], r1\n\t"             \
-                "adc %D[s], %[z]\n\tmul %A[a], %B[w]\n\tadd %B[s], r0\n\tadc %C[s], r1\n\t"             \
-                "adc %D[s], %[z]\n\tmul %B[a], %B[w]\n\tadd %C[s], r0\n\tadc %D[s], r1\n\t"             \
-                "sbrs %B[w], 7\n\trjmp 1f\n\tsub %C[s], %A[a]\n\tsbc %D[s], %B[a]\n1:\n\t"                 \
-                "clr __zero_reg__"                                                                       \
+                "adc %D[s], %[z]\n\tmulsu %B[w], %A[a]\n\tsbc %[z], %[z]\n\tadd %B[s], r0\n\t"           \
+                "adc %C[s], r1\n\tadc %D[s], %[z]\n\tmulsu %B[w], %B[a]\n\tadd %C[s], r0\n\t"            \
+                "adc %D[s], r1\n\tclr __zero_reg__"                                                      \
                 : [s] "+r"(S), [z] "=&r"(z_)                                                             \
-                : [a] "r"(A), [w] "r"(w));                                                               \
-    } while (0)
-/* the same for -255 <= w <= 255 (the progress): A wl, less A 256 when w < 0 (two products) */
-#define NNIK_SH_MAC9(S, A, w)                                                                            \
-    do {                                                                                                 \
-        uint8_t z_;                                                                                      \
-        __asm__("clr %[z]\n\tmul %A[a], %A[w]\n\tadd %A[s], r0\n\tadc %B[s], r1\n\tadc %C[s], %[z]\n\t" \
-                "adc %D[s], %[z]\n\tmul %B[a], %A[w]\n\tadd %B[s], r0\n\tadc %C[s], r1\n\t"             \
-                "adc %D[s], %[z]\n\tsbrs %B[w], 7\n\trjmp 1f\n\tsub %B[s], %A[a]\n\tsbc %C[s], %B[a]\n\t"    \
-                "sbc %D[s], %[z]\n1:\n\tclr __zero_reg__"                                                   \
-                : [s] "+r"(S), [z] "=&r"(z_)                                                             \
-                : [a] "r"(A), [w] "r"(w));                                                               \
+                : [a] "a"(A), [w] "a"(w));                                                               \
     } while (0)
 #else
 #define NNIK_SH_MAC(S, A, w) ((S) += (int32_t)(A) * (w))
-#define NNIK_SH_MAC9(S, A, w) NNIK_SH_MAC(S, A, w)
 #endif
 #endif
 
@@ -185,7 +172,7 @@ NNIK_SH_INLINE void nnik_sh_step(nnik_shaper_t *sh, const int32_t p[2], uint8_t 
 #endif
             w = (int16_t)((int16_t)dq - sh->pq[j]);
             if (w)
-                NNIK_SH_MAC9(s2, A, w);
+                NNIK_SH_MAC(s2, A, w);
         }
 #if !NNIK_SH_SAME
         if (d1) {
