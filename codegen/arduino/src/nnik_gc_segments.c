@@ -34,35 +34,40 @@ static uint8_t m4_duty(uint16_t tool, uint32_t v, uint32_t vn)
     return (uint8_t)tool;
 }
 
-static void out_sample(nnik_gc_t *g, const int32_t p[2], uint16_t tool, uint32_t v, uint32_t vn, uint32_t moved)
+/* a sample s of the plan (or of the shaper's tail) through the shaper, the IK and the step counts
+ * to the stepper */
+static void out_sample(nnik_gc_t *g, const nnik_pl_sample_t *s)
 {
-    int32_t in[2], out[2], d[2];
-    uint32_t ticks = SAMPLE_TICKS, a;
-#if NNIK_SH_LEN > 0
-    g->sh.t = m4_duty(tool, v, vn);
-    g->sh.moved = moved; /* the tool's progress: the path length moved (nnik_shaper.h) */
-#else
-    (void)moved;
-#endif
-    nnik_sh_step(&g->sh, p, g->pt);
-    in[0] = NNIK_GC_ORIGIN_X_UM + g->pt[0];
-    in[1] = NNIK_GC_ORIGIN_Y_UM + g->pt[1];
-    if (NNIK_GC_IK(in, out))
+    int32_t out[2], d[2];
+    uint32_t ticks, a;
+    uint8_t duty = m4_duty(s->tool, s->v, s->vn);
+    nnik_sh_step(&g->sh, s->p, duty, s->moved, g->pt); /* the tool's progress: the path length moved */
+#if NNIK_GC_ORIGIN_X_UM == 0 && NNIK_GC_ORIGIN_Y_UM == 0
+    if (NNIK_GC_IK(g->pt, out)) /* the work origin at the machine's 0: the shaped point as it is */
         g->clamped++;
+#else
+    {
+        int32_t in[2];
+        in[0] = NNIK_GC_ORIGIN_X_UM + g->pt[0];
+        in[1] = NNIK_GC_ORIGIN_Y_UM + g->pt[1];
+        if (NNIK_GC_IK(in, out))
+            g->clamped++;
+    }
+#endif
     d[0] = out[0] - g->steps[0];
     d[1] = out[1] - g->steps[1];
-    a = (uint32_t)nnik_iabs32(d[0]);
-    if (ticks < a)
-        ticks = a;
+    ticks = (uint32_t)nnik_iabs32(d[0]);
     a = (uint32_t)nnik_iabs32(d[1]);
     if (ticks < a)
         ticks = a;
-    if (ticks != SAMPLE_TICKS)
+    if (ticks > SAMPLE_TICKS) /* a motor needs more steps than the sample has ticks */
         g->overspeed++;
+    else
+        ticks = SAMPLE_TICKS;
 #if NNIK_SH_LEN > 0
     g->duty = g->sh.duty; /* the tool where the shaped head is (nnik_shaper.h) */
 #else
-    g->duty = m4_duty(tool, v, vn);
+    g->duty = duty;
 #endif
     g->steps[0] = out[0];
     g->steps[1] = out[1];
@@ -77,7 +82,7 @@ static void sample(nnik_gc_t *g)
     g->settle = NNIK_SH_LEN;
     g->tail_tool = s.tool;
     g->samples++;
-    out_sample(g, s.p, s.tool, s.v, s.vn, s.moved);
+    out_sample(g, &s);
 }
 
 #if NNIK_GC_HOLD
@@ -108,15 +113,18 @@ uint8_t nnik_gc_ahead(nnik_gc_t *g)
 
 void nnik_gc_flush(nnik_gc_t *g)
 {
-    int32_t p[2];
+    nnik_pl_sample_t s; /* the shaper's tail: at rest where the plan ended, the last tool word */
     commit(g);
     while (nnik_pl_ready(&g->pl, 1))
         sample(g);
-    p[0] = g->pl.start[0];
-    p[1] = g->pl.start[1];
+    s.p[0] = g->pl.start[0];
+    s.p[1] = g->pl.start[1];
+    s.v = s.moved = 0;
+    s.vn = 1;
+    s.tool = g->tail_tool;
     while (g->settle) {
         g->settle--;
-        out_sample(g, p, g->tail_tool, 0, 1, 0);
+        out_sample(g, &s);
     }
 }
 

@@ -1,5 +1,5 @@
-"""The tool in step with the shaped head: nnik_sh_step's tool_step (codegen/arduino/src/
-nnik_shaper.c), bit for bit, over a whole stream at once.
+"""The tool in step with the shaped head: nnik_sh_step's nnik_sh_tool (codegen/arduino/src/
+nnik_shaper.h), bit for bit, over a whole stream at once.
 
 The planner's progress Q (its path length, in units of 2^(psh - 16) um: Q[n] = floor(sum of the
 samples' path lengths moved (Q16 um) / 2^psh), psh = MachineConfig.progress_shift) goes through

@@ -88,9 +88,7 @@ int main(void) {
     nnik_shaper_t sh; int32_t p[2], o[2] = {0, 0}, z[2] = {0, 0}; int t; long m;
     nnik_sh_init(&sh, z);
     while (scanf("%d %d %d %ld", &p[0], &p[1], &t, &m) == 4) {
-        sh.t = (uint8_t)t;
-        sh.moved = (uint32_t)m;
-        nnik_sh_step(&sh, p, o);
+        nnik_sh_step(&sh, p, (uint8_t)t, (uint32_t)m, o);
         printf("%d %d %d\n", (int)o[0], (int)o[1], sh.duty);
     }
     return 0;
