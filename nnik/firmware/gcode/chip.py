@@ -55,6 +55,12 @@ C_FLAGS = ["-std=gnu11"]
 # invariants and no tree loop passes (registers kept free in the loops); about 700 B of the Uno's
 # G-code build
 SIZE_FLAGS = ["-mrelax", "-mstrict-X", "-fno-move-loop-invariants", "-fno-tree-loop-optimize"]
+# the G-code build's translation units whose functions run every sample, compiled without
+# -mcall-prologues: each saves its registers with its own pushes and pops rather than through
+# libgcc's __prologue_saves__/__epilogue_restores__ (fewer registers saved, no jump in and out, no
+# frame set up through Y when the function has none), at some flash (the pushes in each function)
+HOT_SOURCES = ("nnik_plan.c",)
+HOT_FLAGS = ["-mno-call-prologues"]
 # Debian's avr-gcc 5.4 <float.h> defines DECIMAL_DIG for C only; WString.cpp needs it in C++
 CXX_FLAGS = ["-std=gnu++11", "-fpermissive", "-fno-exceptions", "-fno-threadsafe-statics",
              "-DDECIMAL_DIG=__DECIMAL_DIG__"]
@@ -173,8 +179,10 @@ def build_sketch(libdir: Path, example: str, workdir: Path, defines: dict | None
     bdir = workdir / (example if mcu == MCU else f"{example}-{mcu}")
     bdir.mkdir(parents=True, exist_ok=True)
     inc = [f"-I{libdir / 'src'}", *(f"-D{k}={v}" for k, v in (defines or {}).items())]
-    jobs = [(sketch, bdir / f"{example}.ino.o", inc)]
-    jobs += [(src, bdir / f"{src.name}.o", inc) for src in sorted((libdir / "src").glob("*.c"))]
+    gcode = example.endswith("_gcode")  # the sketch's emit and the stepper's queue run every sample too
+    jobs = [(sketch, bdir / f"{example}.ino.o", [*inc, *(HOT_FLAGS if gcode else [])])]
+    jobs += [(src, bdir / f"{src.name}.o", [*inc, *(HOT_FLAGS if src.name in HOT_SOURCES else [])])
+             for src in sorted((libdir / "src").glob("*.c"))]
     objs = _compile_all(jobs, bdir, mcu)
     elf = bdir / f"{example}.elf"
     try:
