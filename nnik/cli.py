@@ -10,7 +10,7 @@ import warnings
 from nnik.commands import common_options as co, option_types as opt
 from nnik.errors import NnikError, NnikWarning, warning_line
 from nnik.files.atomic_write import reraise_lost_interrupts
-from nnik.files.os_errors import os_error_line
+from nnik.files.os_errors import behind, os_error_line
 from nnik.files.outdir import release_locks
 
 DESCRIPTION = (
@@ -74,7 +74,7 @@ def _main(argv: list[str] | None) -> int:
             print("nnik: interrupted", file=sys.stderr)
             return 130
         except Exception as exc:  # a Ctrl-C that a library's clean-up turned into its own error
-            if not _from_an_interrupt(exc):
+            if behind(exc, KeyboardInterrupt) is None:  # numpy's zip writer, for one
                 raise
             print("nnik: interrupted", file=sys.stderr)
             return 130
@@ -85,18 +85,6 @@ def _main(argv: list[str] | None) -> int:
     for w in {(str(w.message), w.filename, w.lineno): w for w in caught}.values():
         print(warning_line(w), file=sys.stderr)
     return 0
-
-
-def _from_an_interrupt(exc: BaseException) -> bool:
-    """True when a KeyboardInterrupt is in the exception's chain (numpy's zip writer, for one,
-    raises a ValueError while it unwinds from a Ctrl-C)."""
-    seen = set()
-    while exc is not None and id(exc) not in seen:
-        if isinstance(exc, KeyboardInterrupt):
-            return True
-        seen.add(id(exc))
-        exc = exc.__cause__ or exc.__context__
-    return False
 
 
 if __name__ == "__main__":

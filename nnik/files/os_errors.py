@@ -17,16 +17,22 @@ HINTS = {
 }
 
 
-def os_error_behind(exc: BaseException) -> OSError | None:
-    """The OSError a library's own error was raised while handling (optuna's storage, for one,
-    ends a trial whose journal write failed with an AssertionError of its own)."""
+def behind(exc: BaseException | None, kind: type[BaseException]) -> BaseException | None:
+    """The first exception of ``kind`` in exc's chain (exc itself, then what it was raised from or
+    while handling): a library's own error can hide the one that matters."""
     seen = set()
     while exc is not None and id(exc) not in seen:
-        if isinstance(exc, OSError):
+        if isinstance(exc, kind):
             return exc
         seen.add(id(exc))
         exc = exc.__cause__ or exc.__context__
     return None
+
+
+def os_error_behind(exc: BaseException) -> OSError | None:
+    """The OSError a library's own error was raised while handling (optuna's storage, for one,
+    ends a trial whose journal write failed with an AssertionError of its own)."""
+    return behind(exc, OSError)
 
 
 def os_error_line(exc: OSError) -> str:
