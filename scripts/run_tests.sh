@@ -6,9 +6,15 @@
 # (ATEN_CPU_CAPABILITY=default). A model trained on another machine differs in its last bits (the
 # product pins torch's thread count by problem size, but not the CPU's vector kernels), so an
 # assertion that leans on one trained model's figures fails here, not on a user's machine.
+#
+# The tests run on NNIK_TEST_WORKERS processes (pytest-xdist; default: one a core), a test module
+# whole on one of them (its module fixtures built once); the session fixtures that train or run a
+# model are built once for all of them (tests/shared_build.py). OMP_WAIT_POLICY=PASSIVE: torch's
+# threads in one worker sleep, not spin, while the other worker has the core.
 set -u
+export OMP_WAIT_POLICY="${OMP_WAIT_POLICY:-PASSIVE}"
 run() {
-  python3 -m pytest -q --durations=30 "$@"
+  python3 -m pytest -q --durations=30 -n "${NNIK_TEST_WORKERS:-auto}" --dist loadscope "$@"
   local rc=$?
   if [ "$rc" -eq 5 ]; then
     echo "run_tests: pytest collected no tests" >&2

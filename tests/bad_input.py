@@ -11,6 +11,7 @@ import pytest
 
 from nnik.cli import main
 from tests.conftest import DATASETS
+from tests.shared_build import built_once
 
 GALVO = (DATASETS / "galvo_cba2012.toml").read_text()
 COREXY = (DATASETS / "corexy_nonlinear.toml").read_text()
@@ -59,13 +60,14 @@ def with_training(text: str, training: str = TINY_TRAINING) -> str:
 def tiny_run(tmp_path_factory) -> Path:
     """A galvo run with a tiny training budget: generate, train, evaluate and export through the CLI.
     Tests copy it (`copy_run`) before spoiling anything."""
-    d = tmp_path_factory.mktemp("tiny_run")
-    toml = d / "tiny.toml"
-    toml.write_text(with_training(GALVO.replace("n_test = 20000", "n_test = 300")))
-    out = d / "out"
-    for argv in (["generate", toml, "-o", out], ["train", toml, "-o", out], ["evaluate", out], ["export", out]):
-        assert main([str(a) for a in argv]) == 0, argv
-    return out
+    def build(d: Path) -> None:
+        toml = d / "tiny.toml"
+        toml.write_text(with_training(GALVO.replace("n_test = 20000", "n_test = 300")))
+        out = d / "out"
+        for argv in (["generate", toml, "-o", out], ["train", toml, "-o", out], ["evaluate", out], ["export", out]):
+            assert main([str(a) for a in argv]) == 0, argv
+
+    return built_once(tmp_path_factory, "tiny_run", build)[0] / "out"
 
 
 def copy_run(run: Path, dest: Path) -> Path:

@@ -10,6 +10,7 @@ import pytest
 
 from nnik import pipeline
 from nnik.machine.scenario import load_scenario
+from tests.shared_build import built_once
 
 ROOT = Path(__file__).resolve().parents[1]
 DATASETS = ROOT / "datasets"
@@ -33,24 +34,23 @@ def _scenario_file(name: str, outdir: Path) -> Path:
     return dst
 
 
-def _run(name: str, outdir: Path) -> Path:
+def _run(name: str, outdir: Path) -> None:
     scn = load_scenario(_scenario_file(name, outdir))
     pipeline.generate(scn, outdir)
     pipeline.train(scn, outdir, progress=False)
     pipeline.evaluate(outdir)
-    return outdir
 
 
 @pytest.fixture(scope="session")
 def galvo_run(tmp_path_factory) -> Path:
     """build dir of datasets/galvo_cba2012.toml after generate/train/evaluate."""
-    return _run("galvo_cba2012", tmp_path_factory.mktemp("galvo_cba2012"))
+    return built_once(tmp_path_factory, "galvo_cba2012", lambda d: _run("galvo_cba2012", d))[0]
 
 
 @pytest.fixture(scope="session")
 def corexy_run(tmp_path_factory) -> Path:
     """build dir of datasets/corexy_nonlinear.toml (residual mode) after generate/train/evaluate."""
-    return _run("corexy_nonlinear", tmp_path_factory.mktemp("corexy_nonlinear"))
+    return built_once(tmp_path_factory, "corexy_nonlinear", lambda d: _run("corexy_nonlinear", d))[0]
 
 
 def write_toml(tmp_path: Path, text: str, name: str = "s.toml") -> Path:
