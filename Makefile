@@ -69,9 +69,9 @@ bench: setup toolchains
 	$(PYTHON) -m nnik.bench.estimator
 	$(PYTHON) -m nnik.bench.costs
 	$(PYTHON) -m nnik.bench.mlp_cost sweep --kernel fast --tanh '' --arch 4 --arch 6 --arch 8 --arch 10 --arch 12 --arch 16
-	NNIK_HYPOTHESIS_EXAMPLES=300 $(PYTHON) -m pytest -q tests/firmware/gcode/test_gcode_hypothesis.py
-	NNIK_HYPOTHESIS_MACHINES=30 $(PYTHON) -m pytest -q tests/implementations/test_random_machines.py
-	NNIK_HYPOTHESIS_MACHINES=12 $(PYTHON) -m pytest -q tests/machine/test_reference.py
+	NNIK_HYPOTHESIS_PROFILE=explore NNIK_HYPOTHESIS_EXAMPLES=300 $(PYTHON) -m pytest -q tests/firmware/gcode/test_gcode_hypothesis.py
+	NNIK_HYPOTHESIS_PROFILE=explore NNIK_HYPOTHESIS_MACHINES=30 $(PYTHON) -m pytest -q tests/implementations/test_random_machines.py
+	NNIK_HYPOTHESIS_PROFILE=explore NNIK_HYPOTHESIS_MACHINES=12 $(PYTHON) -m pytest -q tests/machine/test_reference.py
 
 clean:
 	rm -rf build $(STAMP)

@@ -7,10 +7,18 @@ import re
 from pathlib import Path
 
 import pytest
+from hypothesis import HealthCheck, settings
 
 from nnik import pipeline
 from nnik.machine.scenario import load_scenario
 from tests.shared_build import built_once
+
+# `make test` draws the same examples on every run and every machine (derandomize: a seed from each
+# test's own code), so what passed here is what CI runs; no deadline and no too-slow check, since
+# the tests share the cores. `make bench` draws fresh random examples (NNIK_HYPOTHESIS_PROFILE=explore).
+settings.register_profile("nnik", derandomize=True, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+settings.register_profile("explore", deadline=None, suppress_health_check=[HealthCheck.too_slow])
+settings.load_profile(os.environ.get("NNIK_HYPOTHESIS_PROFILE", "nnik"))
 
 ROOT = Path(__file__).resolve().parents[1]
 DATASETS = ROOT / "datasets"
