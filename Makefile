@@ -47,6 +47,8 @@ house: setup
 # gpsim: the MLP estimator on 60 random search networks (nnik.bench.estimator), the families'
 # on every shipped scenario and random machines (nnik.bench.costs); the closed-loop XY table's controllers
 # on the simulated Uno (cycles per tick, CPU % at 5 and 1 ms, the top encoder edge rate: nnik.bench.servo); CI measures samples of both
+# The G-code and run tests again on models trained from another seed with torch's generic kernels
+# (an assertion leaning on one trained model's last bits fails here).
 bench: setup toolchains
 	$(PYTHON) -m nnik.bench.mlp $(SCENARIO)
 	$(PYTHON) -m nnik.bench.families
@@ -69,6 +71,7 @@ bench: setup toolchains
 	$(PYTHON) -m nnik.bench.estimator
 	$(PYTHON) -m nnik.bench.costs
 	$(PYTHON) -m nnik.bench.mlp_cost sweep --kernel fast --tanh '' --arch 4 --arch 6 --arch 8 --arch 10 --arch 12 --arch 16
+	NNIK_TEST_SEED_OFFSET=7 ATEN_CPU_CAPABILITY=default bash scripts/run_tests.sh tests/firmware/gcode tests/test_cli_run.py
 	NNIK_HYPOTHESIS_PROFILE=explore NNIK_HYPOTHESIS_EXAMPLES=300 $(PYTHON) -m pytest -q tests/firmware/gcode/test_gcode_hypothesis.py
 	NNIK_HYPOTHESIS_PROFILE=explore NNIK_HYPOTHESIS_MACHINES=30 $(PYTHON) -m pytest -q tests/implementations/test_random_machines.py
 	NNIK_HYPOTHESIS_PROFILE=explore NNIK_HYPOTHESIS_MACHINES=12 $(PYTHON) -m pytest -q tests/machine/test_reference.py

@@ -51,10 +51,15 @@ def one_error(proc: subprocess.CompletedProcess, *needles: str) -> str:
 def leftovers(d: Path) -> list[str]:
     """Temporary files and folders nnik's atomic writers make (none may stay behind)."""
     d = Path(d)
-    if not d.is_dir():
-        return []
-    return sorted(str(p.relative_to(d)) for p in d.rglob(".*") if ".tmp" in p.name or ".staging-" in p.name
-                  or ".old-" in p.name)
+    for _ in range(20):  # a writer may remove a staging folder while the walk is inside it: walk again
+        if not d.is_dir():
+            return []
+        try:
+            return sorted(str(p.relative_to(d)) for p in d.rglob(".*") if ".tmp" in p.name or ".staging-" in p.name
+                          or ".old-" in p.name)
+        except FileNotFoundError:
+            continue
+    raise AssertionError(f"{d}: its temporary files kept vanishing under the walk")
 
 
 def whole(p: Path) -> bool:

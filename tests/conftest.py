@@ -27,7 +27,7 @@ DATASETS = ROOT / "datasets"
 def _scenario_file(name: str, outdir: Path) -> Path:
     """The shipped scenario, or with NNIK_TEST_SEED_OFFSET=k a copy whose [dataset] seed is moved by
     k: the same machine with another sampling and training, as another machine's CPU would train
-    it. scripts/run_tests.sh runs the model-dependent tests that way too, so no assertion can
+    it. `make bench` runs the model-dependent tests that way too, so no assertion can
     lean on one trained model's figures."""
     src = DATASETS / f"{name}.toml"
     shift = int(os.environ.get("NNIK_TEST_SEED_OFFSET", "0"))

@@ -6,7 +6,7 @@ scattered or on a grid, whole-microstep counter readings (+-0.5 of rounding). Th
 the families' ladders (poly, lut, hybrid; no MLP training, no simulators) then run as in
 `nnik run`, on a coarser check grid. The claimed max error of every family's best that meets
 max_error (the bootstrap of nnik.machine.ref_claim) must not be better than the truth by more
-than HONEST, nor worse than CLAIM_OVER times it (HONEST x true <= claimed <= CLAIM_OVER x true,
+than HONEST, nor worse than claim_over(n) times it (HONEST x true <= claimed <= claim_over(n) x true,
 true: the max over the marks' hull). Hypothesis draws the frames (NNIK_HYPOTHESIS_MACHINES, 3 in
 CI); `make bench` runs more, and the larger sweep (python -m nnik.bench.measured --sweep N).
 """
@@ -23,7 +23,7 @@ from hypothesis import strategies as st
 from nnik import pipeline
 
 from nnik.machine import reference
-from nnik.bench.measured import CLAIM_OVER, HONEST, measured_toml, random_belt_toml
+from nnik.bench.measured import HONEST, claim_over, measured_toml, random_belt_toml
 from nnik.machine.data import build_dataset, exact_targets
 from nnik.errors import NnikError
 from nnik.implementations import problem as problem_mod
@@ -85,7 +85,7 @@ def test_claimed_accuracy_is_within_its_margin_of_the_truth(tmp_path_factory, co
     assert len(pts) > 1000 and ref.hull.inside(problem.to_mm(pts), 1e-6).all()
     exact = exact_targets(truth, problem.to_mm(pts))
     ref_true = np.abs(ref_q - exact).max()
-    assert HONEST * ref_true <= ref.error_max <= CLAIM_OVER * ref_true, (ref.error_max, ref_true)
+    assert HONEST * ref_true <= ref.error_max <= claim_over(n) * ref_true, (ref.error_max, ref_true)
     # no [target]: the default is defined and above the reference's own error
     assert problem.scn.target["max_error"] >= max(0.25, ref.error_max)
     assert problem.scn.target["max_error_source"].startswith("default")
@@ -97,7 +97,7 @@ def test_claimed_accuracy_is_within_its_margin_of_the_truth(tmp_path_factory, co
         # the claim combines the implementation's error field with the reference's: never more
         # than their maxima added
         assert c.claimed_max <= c.acc["pre_max"] + ref.fields.emax + 1e-9
-        assert HONEST * true <= c.claimed_max <= CLAIM_OVER * true, (c.impl.describe(), c.claimed_max, true)
+        assert HONEST * true <= c.claimed_max <= claim_over(n) * true, (c.impl.describe(), c.claimed_max, true)
 
 
 def test_header_names_the_reference_not_the_exact_ik(tmp_path, coarse_check):

@@ -61,6 +61,27 @@ def stuck(uno: PtyChip, g, events: list) -> str:
             f"counted in flight {g._rx_buffer_fill}, state {g.cmode}")
 
 
+def settle(uno: PtyChip, g, events: list, hold_s: float = 0.5, tries: int = 10) -> bool:
+    """grbl-streamer idle: no query of its poller ($#, $G) due or unanswered, nothing left unread,
+    and no new query for hold_s of the chip's time."""
+    def queries() -> list[str]:
+        return [d[0] for e, d in events if e == "on_write" and d[0].startswith("$")]
+
+    def answered() -> bool:
+        gc = sum(1 for e, d in events if e == "on_read" and d[0].startswith("[GC:"))
+        return (g.cmode == "Idle" and not g.hash_state_requested and not g.gcode_parser_state_requested
+                and queries().count("$G\n") == gc and g._queue.empty())
+
+    for _ in range(tries):
+        if not uno.wait_sim(answered, 10):
+            return False
+        sent, t0 = len(queries()), uno.sim_seconds()
+        uno.wait_sim(lambda: uno.sim_seconds() > t0 + hold_s, hold_s + 1)
+        if answered() and len(queries()) == sent:
+            return True
+    return False
+
+
 def job_lines(path: Path) -> list[str]:
     """A job's lines as a sender sends them (stripped, the blank ones too)."""
     return [ln.decode("latin-1").strip() for ln in split_lines(path.read_bytes())]
@@ -98,6 +119,10 @@ def test_grbl_streamer_streams_a_job(grbl_firmware, tmp_path):
             # and its $G: grbl-streamer sends it from its polling thread outside its character
             # count, so a job started before that ok would lose count (as with grbl itself)
             assert uno.wait_sim(lambda: any(e == "on_read" and d[0].startswith("[GC:") for e, d in events), 10)
+            # and every query its poller sends when the state changes while no job runs ($G on the
+            # first report's Idle, too), answered and read, for half a second of the chip's time:
+            # an ok read after the job starts would free a job line's bytes in its count
+            assert settle(uno, g, events), stuck(uno, g, events)
             g.load_file(str(job))
             g.job_run()
             assert uno.wait_sim(done.is_set, 2 * job_s + 10), stuck(uno, g, events)
