@@ -25,8 +25,8 @@ PARTS = {  # a part of the loop: the functions it runs (the IK: NAME_ik)
     "the shaper and the step counts (out_sample)": ("out_sample", "nnik_sh_step", "__usmulhisi3",
                                                     "__usmulhisi3_tail"),
     "the segment queue": ("emit", "sample", "nnik_grbl_poll", "nnik_grbl_wait", "nnik_port_idle", "nnik_gc_ahead",
-                          "commit", "nnik_port_room"),
-    "the stepper interrupt": ("__vector_11", "__vectors"),
+                          "commit", "nnik_port_room", "emit_wait", "fill"),
+    "the stepper interrupt": ("__vector_11", "nnik_tick_slow", "__vectors"),
     "call prologues and epilogues": ("__prologue_saves__", "__epilogue_restores__"),
 }
 

@@ -473,30 +473,35 @@ static inline int32_t mul_q30(int32_t u, uint32_t s)
 {
     uint32_t a = u < 0 ? (uint32_t)0 - (uint32_t)u : (uint32_t)u, plo, hi, q;
 #if defined(__GNUC__) && defined(__AVR__) && defined(__AVR_HAVE_MUL__)
-    /* a s = hi 2^32 + plo by the 16 byte products, column by column (byte k of the product gets
-     * every a_i s_j with i + j = k; the three bytes from k up hold the column's sum and carries:
-     * the sum of the columns up to k is below 2^(8k + 19), so nothing carries past byte k + 2) */
-    uint8_t z;
-    __asm__("clr %A0\n\tclr %B0\n\tclr %C0\n\tclr %D0\n\tclr %A1\n\tclr %B1\n\tclr %C1\n\tclr %D1\n\tclr %2\n\t"
-            "mul %A3,%A4\n\tadd %A0,r0\n\tadc %B0,r1\n\tadc %C0,%2\n\t"
-            "mul %A3,%B4\n\tadd %B0,r0\n\tadc %C0,r1\n\tadc %D0,%2\n\t"
-            "mul %B3,%A4\n\tadd %B0,r0\n\tadc %C0,r1\n\tadc %D0,%2\n\t"
-            "mul %A3,%C4\n\tadd %C0,r0\n\tadc %D0,r1\n\tadc %A1,%2\n\t"
-            "mul %B3,%B4\n\tadd %C0,r0\n\tadc %D0,r1\n\tadc %A1,%2\n\t"
-            "mul %C3,%A4\n\tadd %C0,r0\n\tadc %D0,r1\n\tadc %A1,%2\n\t"
-            "mul %A3,%D4\n\tadd %D0,r0\n\tadc %A1,r1\n\tadc %B1,%2\n\t"
-            "mul %B3,%C4\n\tadd %D0,r0\n\tadc %A1,r1\n\tadc %B1,%2\n\t"
-            "mul %C3,%B4\n\tadd %D0,r0\n\tadc %A1,r1\n\tadc %B1,%2\n\t"
-            "mul %D3,%A4\n\tadd %D0,r0\n\tadc %A1,r1\n\tadc %B1,%2\n\t"
-            "mul %B3,%D4\n\tadd %A1,r0\n\tadc %B1,r1\n\tadc %C1,%2\n\t"
-            "mul %C3,%C4\n\tadd %A1,r0\n\tadc %B1,r1\n\tadc %C1,%2\n\t"
-            "mul %D3,%B4\n\tadd %A1,r0\n\tadc %B1,r1\n\tadc %C1,%2\n\t"
-            "mul %C3,%D4\n\tadd %B1,r0\n\tadc %C1,r1\n\tadc %D1,%2\n\t"
-            "mul %D3,%C4\n\tadd %B1,r0\n\tadc %C1,r1\n\tadc %D1,%2\n\t"
-            "mul %D3,%D4\n\tadd %C1,r0\n\tadc %D1,r1\n\t"
-            "clr __zero_reg__"
-            : "=&r"(plo), "=&r"(hi), "=&r"(z)
-            : "r"(a), "r"(s));
+    if ((uint16_t)(s >> 16)) { /* 65.536 mm or more along the block (rare): libgcc's 32 x 32 -> 64 */
+        union { /* little-endian: the words by byte moves */
+            uint64_t p;
+            uint32_t w[2];
+        } v;
+        v.p = (uint64_t)a * s;
+        plo = v.w[0];
+        hi = v.w[1];
+    } else {
+        /* a s (s < 2^16) = hi 2^32 + plo (hi < 2^16) by the 8 byte products, column by column
+         * (byte k of the product gets every a_i s_j with i + j = k; the three bytes from k up hold
+         * the column's sum and carries: the sum of the columns up to k is below 2^(8k + 18), so
+         * nothing carries past byte k + 2, and past byte 5 not at all) */
+        uint16_t s16 = (uint16_t)s, h16;
+        uint8_t z;
+        __asm__("clr %A0\n\tclr %B0\n\tclr %C0\n\tclr %D0\n\tclr %A1\n\tclr %B1\n\tclr %2\n\t"
+                "mul %A3,%A4\n\tadd %A0,r0\n\tadc %B0,r1\n\tadc %C0,%2\n\t"
+                "mul %A3,%B4\n\tadd %B0,r0\n\tadc %C0,r1\n\tadc %D0,%2\n\t"
+                "mul %B3,%A4\n\tadd %B0,r0\n\tadc %C0,r1\n\tadc %D0,%2\n\t"
+                "mul %B3,%B4\n\tadd %C0,r0\n\tadc %D0,r1\n\tadc %A1,%2\n\t"
+                "mul %C3,%A4\n\tadd %C0,r0\n\tadc %D0,r1\n\tadc %A1,%2\n\t"
+                "mul %C3,%B4\n\tadd %D0,r0\n\tadc %A1,r1\n\tadc %B1,%2\n\t"
+                "mul %D3,%A4\n\tadd %D0,r0\n\tadc %A1,r1\n\tadc %B1,%2\n\t"
+                "mul %D3,%B4\n\tadd %A1,r0\n\tadc %B1,r1\n\t"
+                "clr __zero_reg__"
+                : "=&r"(plo), "=&r"(h16), "=&r"(z)
+                : "r"(a), "r"(s16));
+        hi = h16;
+    }
 #else
     {
         uint16_t ah = (uint16_t)(a >> 16), al = (uint16_t)a, sh = (uint16_t)(s >> 16), sl = (uint16_t)s;

@@ -23,6 +23,17 @@ def test_one_line_without_m400_runs_all_its_segments(firmware, scenario):
     assert tuple(seg.planned_um[-1]) == (2000, 0) and seg.speed_q16[-1] > 0  # it ends on X2 (at rest after it)
 
 
+
+@pytest.mark.parametrize("scenario", MACHINES)
+def test_blocks_past_65_mm_match(firmware, scenario):
+    """The sample's point takes u s / 2^30 from 8 byte products while s, the whole um along the block,
+    is below 2^16, and libgcc's 64-bit product from 65.536 mm on (nnik_plan.c, mul_q30): both ways
+    give the model's steps on the chip."""
+    lines = ["G21 G90", "G0 X-40 Y-30", "G1 X40 Y35 F3000", "G1 X-38 Y30", "M400"]
+    plan, seg, _ = run_both(firmware[scenario], lines)
+    assert plan.replies == ["ok"] * len(lines)
+    assert tuple(seg.planned_um[-1]) == (-38000, 30000)  # two blocks of 103 and 78 mm, sampled to their ends
+
 @pytest.mark.parametrize("scenario", MACHINES)
 @pytest.mark.parametrize("ending", [[], ["M2"], ["M30"], ["M400"]])
 def test_star_and_arcs_match_however_the_job_ends(firmware, scenario, ending):

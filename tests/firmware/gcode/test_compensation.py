@@ -87,7 +87,7 @@ def test_precompensated_job_is_g_code_the_firmware_accepts(machine, tmp_path):
 
 
 @settings(max_examples=4, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
-# up to a tenth of the machine's 500 Hz sample rate: from about 60 Hz up the L path's ringing excess
+# up to 50 Hz: from about 60 Hz up the L path's ringing excess
 # is a few um, at the microstep floor, and ZVD neither halves it nor is meant to (measured: at 60 Hz
 # none 13.0 / ZVD 14.3 um over a 5.8 um floor; at 78 Hz ZVD was worse than none before the planner's
 # rework too) -- an open point of the motion work, not hidden here
