@@ -23,7 +23,6 @@ def test_one_line_without_m400_runs_all_its_segments(firmware, scenario):
     assert tuple(seg.planned_um[-1]) == (2000, 0) and seg.speed_q16[-1] > 0  # it ends on X2 (at rest after it)
 
 
-
 @pytest.mark.parametrize("scenario", MACHINES)
 def test_blocks_past_65_mm_match(firmware, scenario):
     """The sample's point takes u s / 2^30 from 8 byte products while s, the whole um along the block,
@@ -33,6 +32,7 @@ def test_blocks_past_65_mm_match(firmware, scenario):
     plan, seg, _ = run_both(firmware[scenario], lines)
     assert plan.replies == ["ok"] * len(lines)
     assert tuple(seg.planned_um[-1]) == (-38000, 30000)  # two blocks of 103 and 78 mm, sampled to their ends
+
 
 @pytest.mark.parametrize("scenario", MACHINES)
 @pytest.mark.parametrize("ending", [[], ["M2"], ["M30"], ["M400"]])
