@@ -96,9 +96,13 @@ def replacing(path: Path):
     name beside ``path`` with the same suffix; when the block ends without an error the file is
     flushed and moved onto ``path`` in one step, otherwise it is removed and ``path`` is as it was."""
     path = Path(path)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=f".tmp{path.suffix}", dir=path.parent)
-    os.close(fd)
+    tmp = None
     try:
+        # the name is held before a Ctrl-C can be raised: one that lands while mkstemp makes the
+        # file is raised after the with, inside this try, which removes the file
+        with held_interrupt():
+            fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=f".tmp{path.suffix}", dir=path.parent)
+            os.close(fd)
         yield Path(tmp)
         fd = os.open(tmp, os.O_RDONLY)
         try:
@@ -108,8 +112,9 @@ def replacing(path: Path):
         with held_interrupt():
             os.replace(tmp, path)
     except BaseException:
-        with held_interrupt():
-            Path(tmp).unlink(missing_ok=True)
+        if tmp is not None:
+            with held_interrupt():
+                Path(tmp).unlink(missing_ok=True)
         raise
     fsync_dir(path.parent)
 
