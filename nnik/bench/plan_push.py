@@ -72,7 +72,7 @@ def push_cycles(ops: list[tuple], cfg: MachineConfig, workdir: Path, src: Path =
     wrap = workdir / "plpush.c"
     wrap.write_text(WRAP)
     rows, push = vectors(ops)
-    r = run_avr([wrap, src / "nnik_plan.c", src / "nnik_imath.c"], [workdir, src], "plpush", rows, workdir=workdir,
+    r = run_avr([wrap, src / "nnik_plan.c", src / "nnik_plan_sample.c", src / "nnik_imath.c"], [workdir, src], "plpush", rows, workdir=workdir,
                 n_out=2, progress=False, batch_size=4000)
     return r["cycles"][push]
 

@@ -25,7 +25,7 @@ from nnik.emit.c_text import c_comment_safe
 
 ARDUINO = CODEGEN / "arduino"
 ENGINE_C = ("nnik_gc_init.c", "nnik_gc_read.c", "nnik_gcode.c", "nnik_gc_segments.c", "nnik_gc_parse.c", "nnik_gc_tool.c",
-            "nnik_gc_geom.c", "nnik_imath.c", "nnik_plan.c", "nnik_shaper.c")
+            "nnik_gc_geom.c", "nnik_imath.c", "nnik_plan.c", "nnik_plan_sample.c", "nnik_shaper.c")
 ENGINE_FILES = (*ENGINE_C, "nnik_gcode.h", "nnik_gc_block.h", "nnik_gc_tool.h", "nnik_gc_geom.h", "nnik_imath.h",
                 "nnik_plan.h", "nnik_shaper.h", "nnik_grbl.h", "nnik_grbl.c")
 VERSION = "0.1.0"

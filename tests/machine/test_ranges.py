@@ -128,7 +128,7 @@ def test_the_edges_compile_for_the_uno(tmp_path, sample_hz):
         d.mkdir()
         (d / "nnik_gcode_config.h").write_text(header)
         (d / "t.h").write_text("/* the IK is not needed by the planner */\n")
-        for src in ("nnik_plan.c", "nnik_shaper.c"):
+        for src in ("nnik_plan.c", "nnik_plan_sample.c", "nnik_shaper.c"):
             r = subprocess.run([AVR_GCC, "-mmcu=atmega328p", "-Os", "-std=c99", "-Wall", "-Wextra", "-Werror",
                                 "-I", str(d), "-I", str(ARDUINO / "src"), "-c", str(ARDUINO / "src" / src),
                                 "-o", str(d / (src + ".o"))], capture_output=True, text=True)

@@ -63,7 +63,7 @@ SIZE_FLAGS = ["-mrelax", "-mstrict-X", "-fno-move-loop-invariants", "-fno-tree-l
 # 4,937 -> 4,781 busy cycles a sample on galvo, 5,042 -> 4,889 on CoreXY, for 320 B of flash;
 # nnik_gc_segments.c too measured 4,889 -> 4,872 on CoreXY for +214 B (the docs' star build) and
 # +240 B (the circle's): left out, slicer_xy's CoreXY build (32,114 B) would no longer fit the Uno
-HOT_SOURCES = ("nnik_plan.c",)
+HOT_SOURCES = ("nnik_plan_sample.c",)
 HOT_FLAGS = ["-mno-call-prologues"]
 # Debian's avr-gcc 5.4 <float.h> defines DECIMAL_DIG for C only; WString.cpp needs it in C++
 CXX_FLAGS = ["-std=gnu++11", "-fpermissive", "-fno-exceptions", "-fno-threadsafe-statics",

@@ -1,5 +1,6 @@
 """The firmware's motion planner and fixed-rate sampler in Python, bit for bit with
-codegen/arduino/src/nnik_plan.c (its header states every rule and rounding; in short):
+codegen/arduino/src/nnik_plan.c and nnik_plan_sample.c (their header, nnik_plan.h, states every rule
+and rounding; in short):
 
 * units: um (machine frame less the work origin), speeds Q16 um/sample, accelerations Q16
   um/sample^2, unit vectors Q30; a block is a line or an arc chord (or, with
@@ -210,7 +211,7 @@ class Planner:
 
     @staticmethod
     def _can_brake(c: int, rem: int, ve: int, acc: int) -> bool:
-        """nnik_plan.c can_brake: c <= ve (toward a stop, ve = 0: c <= acc), or 2 acc (rem - c) >=
+        """nnik_plan_sample.c can_brake: c <= ve (toward a stop, ve = 0: c <= acc), or 2 acc (rem - c) >=
         x^2 - ve^2 with x = c toward a junction, c - floor(acc / 2) toward a stop (the sampler's own
         steps down, then it lands), rounded against it (acc / 32, D in 1/32 um)."""
         if c <= ve or (not ve and c <= acc):
@@ -225,7 +226,7 @@ class Planner:
         return ((acc >> 5) * ((rem - c) >> 11)) >> 1 >= p
 
     def can_go(self, c: int, rem: int) -> bool:
-        """nnik_plan.c can_go: each block end the sample reaches (rem <= c) it passes at most at
+        """nnik_plan_sample.c can_go: each block end the sample reaches (rem <= c) it passes at most at
         that block's exit, or lands on it when it is a stop (exit 0) and rem <= that block's acc,
         and the block it ends in can still brake."""
         q, k = self.q, 0
@@ -235,6 +236,35 @@ class Planner:
             k += 1
             rem += q[k].l16
         return self._can_brake(c, rem, q[k].exit, q[k].acc)
+
+    def fastest(self, lo: int, hi: int, rem: int) -> int:
+        """nnik_plan_sample.c fastest(): from lo (may go) toward hi (may not), lo + d for
+        d = (hi - lo) >> 1, halved each time, 4 times (or until d is 0), kept where it may go."""
+        d = (hi - lo) >> 1
+        for _ in range(4):
+            if self.can_go(lo + d, rem):
+                lo += d
+            d >>= 1
+            if not d:
+                break
+        return lo
+
+    def slower(self, up: int, rem: int) -> int:
+        """The sample's speed when up (v + acc, at most vn) may not go (nnik_plan_sample.c
+        nnik_pl_sample()): the fastest between hold (min(v, vn)) and up when hold may go; else
+        the fastest between down (v - acc, or the exit when it lies between and may go) and hold
+        (up when hold is 0) when down may go; at least max(acc >> 2, 1)."""
+        b, v = self.q[0], self.v
+        c = min(v, b.vn)  # hold (not at rest: the sample must move)
+        if c and c < up and self.can_go(c, rem):
+            return self.fastest(c, up, rem)
+        hi = c if c else up
+        c = v - b.acc if v > b.acc else 0
+        if c < b.exit < v and self.can_go(b.exit, rem):
+            c = b.exit  # down to the exit if it may go at it
+        if c and self.can_go(c, rem):
+            c = self.fastest(c, hi, rem)
+        return max(c, b.acc >> 2, 1)
 
     def sample(self) -> tuple[tuple[int, int], int, int, int, int]:
         """One sample: (point, speed used, its block's vn, tool word, push index)."""
@@ -248,12 +278,7 @@ class Planner:
         else:
             c = v
         if not self.can_go(c, rem):
-            c = min(v, b.vn)  # hold (not at rest: the sample must move)
-            if not c or not self.can_go(c, rem):
-                c = v - b.acc if v > b.acc else 0
-                if c < b.exit < v and self.can_go(b.exit, rem):
-                    c = b.exit  # down to the exit if it may go at it
-                c = max(c, b.acc >> 2, 1)
+            c = self.slower(c, rem)
         used = self.moved = c  # moved: the path length of the sample (nnik_pl_sample_t.moved)
         s += c
         stop = False

@@ -1,6 +1,6 @@
 """The planner's operations as arrays (run_ops): the same planner, sampler and shaper, in fewer Python steps.
 
-What the chip does per sample (nnik_plan.c, planner.Planner.sample) is kept rule for rule; two
+What the chip does per sample (nnik_plan_sample.c, planner.Planner.sample) is kept rule for rule; two
 things make it fast without changing a bit:
 
 * cruise runs in bulk: at the block's feed (speed = vn) each sample is c = vn as long as the brake
@@ -93,18 +93,14 @@ def _drain(pl: Planner, flushing: bool, X: list, Y: list, V: list, B: list, stop
                     s += k * c
                     continue
             # the brake test (Planner.can_go; inline while the sample stays in its block), then
-            # hold, then the floor
+            # Planner.slower (hold, down, the fastest between, the floor)
             if rem <= c:
                 ok = pl.can_go(c, rem)
             else:
                 ok = c <= ex or _brakes(c, rem, ex, acc)
             if not ok:
-                c = v if v < vn else vn
-                if not c or not pl.can_go(c, rem):
-                    c = v - acc if v > acc else 0
-                    if c < ex < v and pl.can_go(ex, rem):
-                        c = ex
-                    c = max(c, acc >> 2, 1)
+                pl.v = v
+                c = pl.slower(c, rem)
             s += c
             if s < L16:
                 su = s >> 16

@@ -119,9 +119,9 @@ def test_push_on_the_chip_equals_the_model(chip, walks):
     assert got == model(cfg, paths)
 
 
-# nnik_plan.c's mul_q30 (static: the wrapper includes the file) on the chip, with its AVR path
+# nnik_plan_sample.c's mul_q30 (static: the wrapper includes the file) on the chip, with its AVR path
 # (the byte products in assembly), against floor(u s / 2^30), as the model's position
-Q30_WRAP = """#include "nnik_plan.c"
+Q30_WRAP = """#include "nnik_plan_sample.c"
 int8_t q30chk_ik(const int32_t in[2], int32_t out[1])
 {
     out[0] = mul_q30(in[0], (uint32_t)in[1]);

@@ -35,13 +35,13 @@ def test_a_lone_line_is_a_trapezoid_with_exact_sample_counts():
     cruise = np.flatnonzero(v == vn)
     assert cruise[0] == 49 and np.all(np.diff(cruise) == 1) and len(cruise) == 1950
     dec = v[cruise[-1]:]
-    # deceleration: never faster than acc per sample; 49 steps of acc and one sample held where
-    # the brake test (the sampler's own steps down to rest, Q8 speeds) says "not yet", then the
-    # last um is landed on: the sample's speed may be v + acc, the distance it moves is what was
-    # left, within acc of the speed before and of rest
+    # deceleration: never faster than acc per sample, each sample the fastest speed the brake
+    # test (the sampler's own steps down to rest, Q8 speeds) allows, found by halving between
+    # hold and a whole acc down (so some steps are a part of acc); then the last um is landed
+    # on: the sample's speed may be v + acc, the distance it moves is what was left, within acc
+    # of the speed before and of rest
     steps = np.diff(dec[:-1])
-    assert np.all((steps == 0) | (steps == -acc))
-    assert (steps == -acc).sum() == 49 and (steps == 0).sum() == 1
+    assert np.all((steps <= 0) & (steps >= -acc)) and (steps == -acc).sum() >= 45
     assert 0 < s.moved[-1] <= acc and v[-2] - s.moved[-1] <= acc
     assert len(v) == 2050  # the continuous trapezoid takes L / v + v / a = 2050 samples
     assert tuple(p[-1]) == (100000, 0) and np.all(np.diff(p[:, 0]) >= 0)
