@@ -44,7 +44,12 @@ def builds(outdir: Path) -> list[tuple[str, str]]:
 
 
 def main(argv: list[str]) -> int:
-    for outdir in argv or ["build/galvo_cba2012"]:
+    import argparse
+
+    ap = argparse.ArgumentParser(prog="python -m nnik.bench.builds", description=__doc__.split("\n")[0])
+    ap.add_argument("outdirs", nargs="*", default=["build/galvo_cba2012"], metavar="OUTDIR",
+                    help="trained model directories (default: build/galvo_cba2012)")
+    for outdir in ap.parse_args(argv).outdirs:
         scn = load_scenario_of(Path(outdir))
         print(f"{scn.name}: flash / RAM (B) of the G-code firmware")
         rows = builds(Path(outdir))
