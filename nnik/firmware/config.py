@@ -66,6 +66,11 @@ class MachineConfig:
     # an arc (G2/G3 in G17) planned as one block, cut into chords by the sampler
     # (nnik.firmware.gcode.planner_arc); the chip does not do it yet: False for every export
     arc_blocks: bool = False
+    # the sampler's rule when speed + acc may not go: True, the G-code firmware's (nnik_plan_sample.c:
+    # the fastest between the speed that may go and the one that may not, 4 halvings); False, the
+    # rule before it (hold, else speed - acc), kept by the closed-loop reference
+    # (nnik.job.reference) whose tuned gains and pretrained controllers were measured on it
+    speed_search: bool = True
     mcu: str = "atmega328p"  # the chip the firmware is built for (avr-gcc's -mmcu)
     rule: str = ""  # the tool rule (RULES); "" = the tool's default: s for a laser, else z
     marlin: bool = False  # G4 P in ms, Marlin's setup G codes noted, E words read
@@ -209,6 +214,8 @@ class MachineConfig:
         return {**self.tool_defines(), **self.motion_defines()}
 
     def motion_defines(self) -> dict[str, str]:
+        if not self.speed_search:
+            raise ValueError("the chip's sampler always searches (speed_search is the closed-loop reference's)")
         ax, ay = self.acc_q16
         out = {"NNIK_GC_SAMPLE_HZ": f"{self.sample_hz}UL", "NNIK_GC_ACC_X": f"{ax}UL", "NNIK_GC_ACC_Y": f"{ay}UL",
                "NNIK_GC_JDEV_UM": f"{self.junction_dev_um}UL", "NNIK_GC_MAX_FEED_UM_MIN": f"{self.max_feed_um_min}L",

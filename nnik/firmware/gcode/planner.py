@@ -256,6 +256,13 @@ class Planner:
         (up when hold is 0) when down may go; at least max(acc >> 2, 1)."""
         b, v = self.q[0], self.v
         c = min(v, b.vn)  # hold (not at rest: the sample must move)
+        if not self.cfg.speed_search:  # MachineConfig.speed_search: hold, else down
+            if not c or not self.can_go(c, rem):
+                c = v - b.acc if v > b.acc else 0
+                if c < b.exit < v and self.can_go(b.exit, rem):
+                    c = b.exit
+                c = max(c, b.acc >> 2, 1)
+            return c
         if c and c < up and self.can_go(c, rem):
             return self.fastest(c, up, rem)
         hi = c if c else up

@@ -6,6 +6,7 @@ without a shaper."""
 from __future__ import annotations
 
 from dataclasses import replace
+from pathlib import Path
 
 from hypothesis import given, settings
 from hypothesis import strategies as st
@@ -36,10 +37,28 @@ word = st.one_of(line.map(lambda t: f"G1 X{t[0] / 1000:.3f} Y{t[1] / 1000:.3f} F
 
 @settings(max_examples=60, deadline=None, database=None)
 @given(lines=st.lists(word, min_size=1, max_size=25), shaper=st.sampled_from(["none", "zv", "zvd", "ei"]),
-       sample_hz=st.sampled_from([1000, 500]))
-def test_the_bulk_sampler_is_the_sample_by_sample_one(lines, shaper, sample_hz):
-    cfg = cfg_for(shaper, sample_hz)
+       sample_hz=st.sampled_from([1000, 500]), search=st.booleans())
+def test_the_bulk_sampler_is_the_sample_by_sample_one(lines, shaper, sample_hz, search):
+    """Both sampler rules (MachineConfig.speed_search: the chip's search, the closed-loop
+    reference's hold-else-down)."""
+    cfg = replace(cfg_for(shaper, sample_hz), speed_search=search)
     plan = interpret(["G21", "G90", *lines, "G1 X40 F6000", "G1 X-40"], cfg)
     fast, ref = run_ops(plan.ops, cfg), run_ops_reference(plan.ops, cfg)
     for f in FIELDS:
         assert getattr(fast, f) == [tuple(x) if isinstance(x, tuple) else x for x in getattr(ref, f)], f
+
+
+def test_the_search_is_the_chips_and_the_closed_loop_reference_keeps_hold_else_down():
+    """A build from a configuration without the search is refused (the chip always searches); the
+    closed-loop reference's configuration has it off, and on a stop the two rules differ."""
+    import pytest
+
+    from nnik.job.reference import servo_machine
+    from nnik.machine.scenario import load_scenario
+
+    with pytest.raises(ValueError, match="always searches"):
+        replace(BASE, speed_search=False).defines()
+    assert not servo_machine(load_scenario(Path(__file__).resolve().parents[3] / "datasets" / "xy_table.toml"), None).speed_search
+    plan = interpret(["G1 X100 F3000"], BASE)
+    on, off = run_ops(plan.ops, BASE).speed, run_ops(plan.ops, replace(BASE, speed_search=False)).speed
+    assert on != off and len(on) == len(off)
