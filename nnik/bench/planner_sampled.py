@@ -75,30 +75,22 @@ def run_time(run: list[oracle.FBlock], n: int, hz: float, trace: list | None = N
                 v = min(v + a * h, U)
                 if h == t_e:
                     y = L[j]
-            elif V <= B:  # cruise at the nominal speed until the braking curve
-                v = V
+            elif V <= B and rem - max((V * V - X * X) / (2.0 * a), 0.0) > _EPS:
+                v = V  # cruise at the nominal speed until the braking curve (or the block's end)
                 d = rem - max((V * V - X * X) / (2.0 * a), 0.0)
-                h = min(d / V, tau) if d > _EPS else 0.0
-                if h == 0.0:  # on the curve's foot: ride it
-                    h = min((v - X) / a, tau) if v > X else 0.0
-                    if h == 0.0:
-                        y = L[j]
-                        continue
-                    y += v * h - 0.5 * a * h * h
-                    v -= a * h
-                else:
-                    y += V * h
-                    if h == d / V and d >= rem - _EPS:
-                        y = L[j]
-            else:  # ride the braking curve to the block's exit
-                v = B
+                h = min(d / V, tau)
+                y += V * h
+                if h == d / V and d >= rem - _EPS:
+                    y = L[j]
+            else:  # ride the braking curve (from its foot, too) to the block's exit
+                v = U
                 h = min((v - X) / a, tau)
                 if h <= 0.0:
                     y = L[j]
                     continue
                 y += v * h - 0.5 * a * h * h
                 v -= a * h
-                if h == (B - X) / a:
+                if h == (U - X) / a:
                     y, v = L[j], X
             tau -= h
         t += dt

@@ -242,34 +242,28 @@ class Planner:
         d = (hi - lo) >> 1, halved each time, 4 times (or until d is 0), kept where it may go."""
         d = (hi - lo) >> 1
         for _ in range(4):
+            if not d:  # the chip tries lo itself then, which changes nothing
+                break
             if self.can_go(lo + d, rem):
                 lo += d
             d >>= 1
-            if not d:
-                break
         return lo
 
-    def slower(self, up: int, rem: int) -> int:
-        """The sample's speed when up (v + acc, at most vn) may not go (nnik_plan_sample.c
-        nnik_pl_sample()): the fastest between hold (min(v, vn)) and up when hold may go; else
-        the fastest between down (v - acc, or the exit when it lies between and may go) and hold
-        (up when hold is 0) when down may go; at least max(acc >> 2, 1)."""
-        b, v = self.q[0], self.v
+    def slower(self, up: int, v: int, rem: int) -> int:
+        """The sample's speed from speed v when up (v + acc, at most vn) may not go
+        (nnik_plan_sample.c nnik_pl_sample()): hold (min(v, vn)) when it may go, else down (v - acc,
+        or the exit when it lies between and may go), at least max(acc >> 2, 1); with
+        MachineConfig.speed_search the fastest between hold and up, or between down (when it may
+        go) and hold (up when hold is 0)."""
+        b, search = self.q[0], self.cfg.speed_search
         c = min(v, b.vn)  # hold (not at rest: the sample must move)
-        if not self.cfg.speed_search:  # MachineConfig.speed_search: hold, else down
-            if not c or not self.can_go(c, rem):
-                c = v - b.acc if v > b.acc else 0
-                if c < b.exit < v and self.can_go(b.exit, rem):
-                    c = b.exit
-                c = max(c, b.acc >> 2, 1)
-            return c
-        if c and c < up and self.can_go(c, rem):
-            return self.fastest(c, up, rem)
+        if c and c < up and self.can_go(c, rem):  # (hold = up may not go)
+            return self.fastest(c, up, rem) if search else c
         hi = c if c else up
         c = v - b.acc if v > b.acc else 0
         if c < b.exit < v and self.can_go(b.exit, rem):
             c = b.exit  # down to the exit if it may go at it
-        if c and self.can_go(c, rem):
+        if search and c and self.can_go(c, rem):
             c = self.fastest(c, hi, rem)
         return max(c, b.acc >> 2, 1)
 
@@ -285,7 +279,7 @@ class Planner:
         else:
             c = v
         if not self.can_go(c, rem):
-            c = self.slower(c, rem)
+            c = self.slower(c, v, rem)
         used = self.moved = c  # moved: the path length of the sample (nnik_pl_sample_t.moved)
         s += c
         stop = False

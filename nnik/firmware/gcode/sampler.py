@@ -99,8 +99,7 @@ def _drain(pl: Planner, flushing: bool, X: list, Y: list, V: list, B: list, stop
             else:
                 ok = c <= ex or _brakes(c, rem, ex, acc)
             if not ok:
-                pl.v = v
-                c = pl.slower(c, rem)
+                c = pl.slower(c, v, rem)
             s += c
             if s < L16:
                 su = s >> 16
