@@ -1,4 +1,5 @@
-"""Shared fixtures: the shipped scenarios, run once per session through the real pipeline."""
+"""Shared fixtures: the shipped scenarios, run once per session through the real pipeline (or, for
+session_runs, through the command line)."""
 
 from __future__ import annotations
 
@@ -12,6 +13,7 @@ from hypothesis import HealthCheck, settings
 from nnik import pipeline
 from nnik.machine.scenario import load_scenario
 from tests.shared_build import built_once
+from tests.shared_run import SessionRuns
 
 # `make test` draws the same examples on every run and every machine (derandomize: a seed from each
 # test's own code), so what passed here is what CI runs; no deadline and no too-slow check, since
@@ -59,6 +61,13 @@ def galvo_run(tmp_path_factory) -> Path:
 def corexy_run(tmp_path_factory) -> Path:
     """build dir of datasets/corexy_nonlinear.toml (residual mode) after generate/train/evaluate."""
     return built_once(tmp_path_factory, "corexy_nonlinear", lambda d: _run("corexy_nonlinear", d))[0]
+
+
+@pytest.fixture(scope="session")
+def session_runs(tmp_path_factory):
+    """A long shell command (`nnik run datasets/xy_table.toml`) run once per session for every test
+    that needs its output (tests/shared_run.py)."""
+    return SessionRuns(tmp_path_factory)
 
 
 def write_toml(tmp_path: Path, text: str, name: str = "s.toml") -> Path:

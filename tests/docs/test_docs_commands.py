@@ -3,32 +3,34 @@ root of a fresh copy of the repository, one copy per page (tests/docs/pages.py s
 marks its commands).
 
 One step is expensive and many pages begin with it: `nnik run` on a shipped scenario (about a
-minute). SHARED names such steps and what they write; the first page that needs one runs it in a
-fresh copy of its own, once per session, and every page whose block holds that exact command gets
-that run's output directory copied into its own copy at that point, instead of training again."""
+minute; five or six for the xy_table). SHARED names such steps and what they write; each runs
+verbatim in a fresh copy of its own once per session (tests/shared_run.py;
+tests/job/test_closed_loop.py shares the xy_table's), and every page whose block holds that exact
+command gets that run's output directory copied into its own copy at that point, instead of
+training again."""
 
 from __future__ import annotations
 
 import os
 import shutil
 import subprocess
-import sys
 from pathlib import Path
 
 import pytest
 
 from tests.docs.pages import LANGUAGES, blocks, commands, fresh_copy, pages, shown_failures, shown_nnik_commands
+from tests.shared_run import TIMEOUT_S, SessionRuns, shell_env
 
 SHARED = {"nnik run datasets/galvo_cba2012.toml": "build/galvo_cba2012", "nnik run datasets/xy_table.toml": "build/xy_table"}
-TIMEOUT_S = 1200
-
-
-def _env() -> dict:
-    return {**os.environ, "PATH": f"{Path(sys.executable).parent}{os.pathsep}{os.environ['PATH']}"}
 
 
 def run(cmd: str, cwd: Path, page: str, expect: str | None = None) -> None:
-    r = subprocess.run(cmd, shell=True, cwd=cwd, env=_env(), capture_output=True, text=True, timeout=TIMEOUT_S)
+    check(subprocess.run(cmd, shell=True, cwd=cwd, env=shell_env(), capture_output=True, text=True, timeout=TIMEOUT_S),
+          page, expect)
+
+
+def check(r: subprocess.CompletedProcess, page: str, expect: str | None = None) -> None:
+    cmd = r.args
     if expect is not None:  # a failure the page shows: exit 2 and the page's line, nothing more
         assert (r.returncode, r.stderr.strip()) == (2, expect), f"{page}: `{cmd}`: {r.returncode}, {r.stderr[-800:]}"
         return
@@ -36,20 +38,8 @@ def run(cmd: str, cwd: Path, page: str, expect: str | None = None) -> None:
     assert "Traceback" not in r.stderr, f"{page}: `{cmd}`: {r.stderr[-800:]}"
 
 
-class SharedRuns:
-    def __init__(self, base: Path):
-        self.base, self.done = base, {}
-
-    def output(self, cmd: str, page: str) -> Path:
-        if cmd not in self.done:
-            repo = fresh_copy(self.base / f"shared{len(self.done)}")
-            run(cmd, repo, page)
-            self.done[cmd] = repo / SHARED[cmd]
-        return self.done[cmd]
-
-
 @pytest.fixture(scope="session")
-def shared_runs(tmp_path_factory) -> SharedRuns:
+def shared_runs(session_runs) -> SessionRuns:
     from nnik.targets import toolchain
 
     for target in ("avr", "pic18"):
@@ -59,7 +49,7 @@ def shared_runs(tmp_path_factory) -> SharedRuns:
                 pytest.fail(why)
             pytest.skip(why)
     assert shutil.which("nnik"), "the nnik console script is installed (pip install -e .)"
-    return SharedRuns(tmp_path_factory.mktemp("shared_runs"))
+    return session_runs
 
 
 RUNNABLE = [p for p in pages() if commands(p) or shown_failures(p)]
@@ -70,7 +60,9 @@ def test_a_pages_commands_run_verbatim_from_a_fresh_copy(page, shared_runs, tmp_
     repo = fresh_copy(tmp_path / "nnik")
     for cmd in commands(page):
         if cmd in SHARED:
-            shutil.copytree(shared_runs.output(cmd, page.name), repo / SHARED[cmd])
+            out, r = shared_runs.run(cmd, SHARED[cmd])
+            check(r, page.name)
+            shutil.copytree(out, repo / SHARED[cmd])
         else:
             run(cmd, repo, page.name)
     for cmd, error in shown_failures(page):

@@ -8,6 +8,7 @@ from __future__ import annotations
 import json
 import os
 import re
+import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -27,10 +28,14 @@ def nnik(*args, cwd=ROOT) -> subprocess.CompletedProcess:
 
 
 @pytest.fixture(scope="module")
-def xy_run(tmp_path_factory) -> tuple[Path, subprocess.CompletedProcess]:
-    out = tmp_path_factory.mktemp("xy") / "xy_table"
-    r = nnik("run", ROOT / "datasets" / "xy_table.toml", "-o", out)
+def xy_run(session_runs, tmp_path_factory) -> tuple[Path, subprocess.CompletedProcess]:
+    """`nnik run datasets/xy_table.toml` from the root of a fresh copy, as docs/closed_loop.md runs it
+    (once per session for both, tests/shared_run.py): this module's own copy of its output (the
+    tests write into it), and the command's stdout."""
+    built, r = session_runs.run("nnik run datasets/xy_table.toml", "build/xy_table")
     assert r.returncode == 0, r.stderr[-2000:]
+    out = tmp_path_factory.mktemp("xy") / "xy_table"
+    shutil.copytree(built, out)
     return out, r
 
 
@@ -159,8 +164,6 @@ def test_nnik_export_a_neural_controller_builds_with_arduino_mk(xy_run, tmp_path
     pretrained weights (the run's params in its config header), builds and fits the Uno; the seed's
     125 s circle (about 23.6 kB stored) is too long beside a learning controller: one line, nothing
     written."""
-    import shutil
-
     from nnik.targets.avr import elf_sizes
 
     out, _ = xy_run
