@@ -72,8 +72,9 @@ def arc_axis_accel(rng, n: int) -> dict[bool, list[float]]:
         r, sweep = float(rng.uniform(2000, 20000)), float(rng.uniform(90, 360))
         pieces = [("line", 5000.0, 0.0), ("arc", r, sweep, float(rng.uniform(10, 200))), ("line", 5000.0, 0.0)]
         for ab in (False, True):
-            ops = arc_block_ops(pieces, cfg.max_feed_um_min, cfg) if ab else path_ops(pieces, cfg.max_feed_um_min)
-            P, s = exact_points(ops, cfg)
+            c = dataclasses.replace(cfg, arc_blocks=ab)
+            ops = arc_block_ops(pieces, c.max_feed_um_min, c) if ab else path_ops(pieces, c.max_feed_um_min)
+            P, s = exact_points(ops, c)
             mid = s[1:-1]
             inside = (mid > 5300) & (mid < 5000 + r * np.radians(sweep) - 300)
             lim = np.asarray(acc, float) / cfg.sample_hz ** 2
@@ -123,8 +124,9 @@ def main(argv=None) -> int:
     for _ in range(args.paths):
         pieces = random_pieces(rng, 20)
         feed = cfg.max_feed_um_min
-        a, b = path_ops(pieces, feed), arc_block_ops(pieces, feed, cfg)
-        (ti0, tf0), (ti1, tf1) = job_seconds(a, cfg), job_seconds(b, cfg)
+        arcs = dataclasses.replace(cfg, arc_blocks=True)
+        a, b = path_ops(pieces, feed), arc_block_ops(pieces, feed, arcs)
+        (ti0, tf0), (ti1, tf1) = job_seconds(a, cfg), job_seconds(b, arcs)
         ri.append(ti0 / ti1)
         rf.append(tf0 / tf1)
     print(f"random CAM paths ({args.paths}, 0.01-0.2 mm chords, lookahead 8): integer median {np.median(ri):.3f} "

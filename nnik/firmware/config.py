@@ -10,6 +10,7 @@ acc_q16 (um/sample^2 * 65536, floor), vn_max_q16 (um/sample * 65536 at max feed,
 from __future__ import annotations
 
 from dataclasses import dataclass
+from math import isqrt
 
 from nnik.dynamics.shapers import KINDS, design, quantize
 
@@ -66,10 +67,12 @@ class MachineConfig:
     # an arc (G2/G3 in G17) planned as one block, cut into chords by the sampler
     # (nnik.firmware.gcode.planner_arc); the chip does not do it yet: False for every export
     arc_blocks: bool = False
-    # the sampler's rule when speed + acc may not go: True, the G-code firmware's (nnik_plan_sample.c:
-    # the fastest between the speed that may go and the one that may not, 4 halvings); False, the
-    # rule before it (hold, else speed - acc), kept by the closed-loop reference
-    # (nnik.job.reference) whose tuned gains and pretrained controllers were measured on it
+    # the sampler's rule: True, the G-code firmware's (nnik_plan_sample.c: when speed + acc may not go,
+    # the fastest between the speed that may go and the one that may not, 4 halvings; the brake
+    # test's credit brake_alpha_q16; block ends passed at most at the junction's limit); False, the
+    # rule before both (hold, else speed - acc; no credit; block ends at most at their exit), kept by
+    # the closed-loop reference (nnik.job.reference) whose tuned gains and pretrained controllers
+    # were measured on it
     speed_search: bool = True
     mcu: str = "atmega328p"  # the chip the firmware is built for (avr-gcc's -mmcu)
     rule: str = ""  # the tool rule (RULES); "" = the tool's default: s for a laser, else z
@@ -94,6 +97,23 @@ class MachineConfig:
         rows = tuple((cx, cy, d, *(ranges.motor_q16(x, self.sample_hz, k + 1, lim[k]) if x else 0 for k, x in enumerate((v, a))))
                      for cx, cy, d, v, a in self.motor_rows)
         return rows, ranges.motor_q16(self.motor_vc_um_s, self.sample_hz, 1, ranges.SPEED_Q16_LIMIT)
+
+    @property
+    def brake_alpha_q16(self) -> int:
+        """The sampler's brake test credit (nnik_plan.h NNIK_PL_ALPHA, Q16 um/sample^2): half the
+        least acceleration any block may get (an axis' limit, or a motor's after the IK: a block
+        along u has acc >= A 2^15 / (|c . u| + d + 1) >= A 2^15 / (ceil|c| + d + 1)), so that it is
+        at most half of every block's acc; 0 for the closed-loop reference's rule (speed_search
+        False) and for whole-arc blocks (planner_arc: their acc may be less)."""
+        if not self.speed_search or self.arc_blocks:
+            return 0
+        least = min(self.acc_q16)
+        if self.motor_rows:
+            for cx, cy, d, _, a in self.motor_q16[0]:
+                if a:
+                    n = isqrt(cx * cx + cy * cy) + 1 + d + 1
+                    least = min(least, max((a << 15) // n - 1, 0))
+        return least >> 1
 
     @property
     def rapid_um_min(self) -> int:
@@ -219,7 +239,8 @@ class MachineConfig:
         ax, ay = self.acc_q16
         out = {"NNIK_GC_SAMPLE_HZ": f"{self.sample_hz}UL", "NNIK_GC_ACC_X": f"{ax}UL", "NNIK_GC_ACC_Y": f"{ay}UL",
                "NNIK_GC_JDEV_UM": f"{self.junction_dev_um}UL", "NNIK_GC_MAX_FEED_UM_MIN": f"{self.max_feed_um_min}L",
-               "NNIK_PL_N": str(self.lookahead), "NNIK_SH_LEN": str(self.shaper_len)}
+               "NNIK_PL_N": str(self.lookahead), "NNIK_PL_ALPHA": f"{self.brake_alpha_q16}UL",
+               "NNIK_SH_LEN": str(self.shaper_len)}
         out.update(self.motor_defines())
         if self.shaper_taps:
             n = max(len(a) for a, _ in self.shaper_taps)

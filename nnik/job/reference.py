@@ -56,7 +56,7 @@ def servo_machine(scn, seg_um: int | None) -> MachineConfig:
         raise NnikError(f"[motion] sample_hz = {cfg.sample_hz} must be one sample per servo tick "
                         f"({per_s:g} for tick_s = {scn.servo.tick_s:g} s)", scn.source, "[motion] sample_hz")
     lo, hi = domain_um(scn.workspace)
-    # speed_search False: the reference's sampler keeps hold-else-down (MachineConfig.speed_search)
+    # speed_search False: the reference's sampler keeps the rule before the search and the brake credit
     return replace(cfg, origin_um=(0, 0), bounds_um=((int(lo[0]), int(lo[1])), (int(hi[0]), int(hi[1]))),
                    speed_search=False)
 

@@ -22,13 +22,21 @@ from nnik.firmware.config import MachineConfig
 from nnik.firmware.gcode.interpreter import run_lines
 from nnik.firmware.gcode.planner import run_ops_reference
 from nnik.firmware.gcode.sampler import run_ops
-from tests.bench.test_planner_oracle import limits, machine
+from tests.bench.test_planner_oracle import limits
+from tests.bench.test_planner_oracle import machine as line_machine
 
 piece = st.one_of(
     st.tuples(st.just("arc"), st.floats(200, 20000), st.floats(-360, 360), st.floats(10, 200)),
     st.tuples(st.just("line"), st.floats(20, 5000), st.floats(-180, 180)),
     st.tuples(st.just("rev"), st.floats(10, 3000)),
 )
+
+
+def machine(lim: dict) -> MachineConfig:
+    """test_planner_oracle's machine with arc blocks (their sampler rule: no brake credit)."""
+    return dataclasses.replace(line_machine(lim), arc_blocks=True)
+
+
 SETTINGS = dict(deadline=None, database=None, suppress_health_check=list(HealthCheck))
 
 
@@ -64,7 +72,8 @@ def test_arc_blocks_bulk_sampler_is_the_reference_and_walks_the_chords(pieces, l
 def test_a_smooth_arc_is_one_block_at_its_centripetal_limit():
     """A 20 mm radius half circle in 0.05 mm chords at a feed far above its limit: one block,
     cruising at floor(sqrt(amin r 46340 / 2^16)) (Q16), below the float sqrt(amin r / sqrt(2))."""
-    cfg = MachineConfig(origin_um=(0, 0), max_feed_um_min=15_000_000, accel_um_s2=(1_000_000, 2_000_000))
+    cfg = MachineConfig(origin_um=(0, 0), max_feed_um_min=15_000_000, accel_um_s2=(1_000_000, 2_000_000),
+                        arc_blocks=True)
     ops = arc_block_ops([("arc", 20000.0, 180.0, 50.0)], cfg.max_feed_um_min, cfg)
     assert [op[0] for op in ops] == ["arc", "flush"]
     fb = oracle.blocks_of(ops, cfg)[0][0]

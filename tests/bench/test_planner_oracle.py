@@ -61,13 +61,11 @@ def test_job_time_on_random_paths_against_the_float_planner():
     limits (nnik.bench.lookahead.random_case: 40 pieces of corners, 0.01-0.2 mm chords, arcs and
     reversals; 2-16 blocks; 500, 1000 or 2000 Hz), against the float planner on the chip's sample
     clock (its queue moves on between samples, as the chip's; nnik.bench.planner_sampled) and
-    against the continuous one (a block joins the moment the head leaves one).  Measured on these
-    60 (seeds 0-59): on the clock median 1.006, at most 1.046, 9 more than 3 samples above 1.02;
-    continuous median 1.018, at most 1.144, 26 above 1.02 (before the sampler searched between the
-    speed that may go and the one that may not: on the clock 1.018 / 1.227 / 28, continuous
-    1.030 / 1.318 / 36).  Not every path is within 2 %: with chords short against a sample's travel
-    and an acceleration of a good part of the speed per sample, a speed held for a whole sample
-    costs more than the float's continuous one (the bounds below leave a margin over the figures)."""
+    against the continuous one (a block joins the moment the head leaves one): every path within
+    2 % (and 3 samples) of the float on the clock, and never faster than the continuous one.  The
+    measured figures are in the print and in docs/motion.md; the bounds leave a margin over them
+    (the rule before the brake test's credit, NNIK_PL_ALPHA, fails them: on the clock median 1.006,
+    at most 1.046, 9 paths over 2 %)."""
     clock, cont = [], []
     for seed in range(60):
         ops, cfg = random_case(seed)
@@ -78,8 +76,8 @@ def test_job_time_on_random_paths_against_the_float_planner():
     over = sum(c["over_2pct_samples"] > 3 for c in clock)
     print(f"clock: median {np.median(ratios):.4f} max {ratios.max():.4f} over {over}; continuous: median "
          f"{np.median(cont):.4f} max {max(cont):.4f}")
-    assert np.median(ratios) <= 1.01 and ratios.max() <= 1.06 and over <= 12, (np.median(ratios), ratios.max(), over)
-    assert np.median(cont) <= 1.025 and max(cont) <= 1.16, (np.median(cont), max(cont))
+    assert over == 0 and np.median(ratios) <= 1.005, (np.median(ratios), ratios.max(), over)
+    assert np.median(cont) <= 1.015 and max(cont) <= 1.12 and min(cont) >= 0.995, (np.median(cont), max(cont), min(cont))
 
 
 @settings(max_examples=60, deadline=None, database=None, suppress_health_check=list(HealthCheck))

@@ -198,22 +198,27 @@ static uint32_t junction(const nnik_pl_block_t *a, const nnik_pl_block_t *b)
  * while the whole um of the blocks between are at most max(vn_m, acc_m) >> 16: a sample of m
  * travels at most max(vn_m, acc_m), and must travel farther than the blocks between).
  *
- * Why the sampler then never passes a junction above its exit (the defect this fixes: braking by
+ * Why the sampler then never passes a junction above its limit (the defect this fixes: braking by
  * block k + 1's own acc, a sample that passes the junction at the exit could land up to its own
  * travel into block k + 1, above the braking curve there when acc_{k+1} > acc_k; the next samples,
  * braking by acc_{k+1}, then passed its end above its exit).  On the path position y, let F(y) =
  * e^2 + 2 acc (distance to the block's end) in the block y lies in (e its exit): the square of
- * the speed from which the block can still brake.  Every speed the sampler accepts by can_go()
- * satisfies c^2 <= F(y) where it lands (c <= e, or the brake test, which gives c^2 - e^2 <=
- * 2 acc R with R the exact distance left: ceil and floor there only tighten it), and passes its
- * junctions at most at their exits.  The fallback c' = c - a (a: the head block's acc, a sample
- * from y to y' = y + c') keeps it:  c'^2 = c^2 - 2 a c + a^2 <= F(y) - 2 a (y' - y) - a^2.  The
- * backward pass gives exit_i^2 <= exit_{i+1}^2 + 2 a_i' L_{i+1} with a_i' <= a for every block
+ * the speed from which the block can still brake, and al = NNIK_PL_ALPHA, at most half of every
+ * block's acc (MachineConfig.brake_alpha_q16).  Every speed the sampler accepts by can_go()
+ * toward a junction satisfies (c - al)^2 <= F(y) where it lands (c - al <= e, or the brake test,
+ * which gives (c - al)^2 - e^2 <= 2 acc R with R the exact distance left: ceil and floor there
+ * only tighten it), and passes its junctions at most at their limits.  The fallback c' = c - a
+ * (a: the head block's acc, a sample from y to y' = y + c') keeps it:  (c' - al)^2 =
+ * (c - al)^2 - 2 a c' - a (a - 2 al) <= F(y) - 2 a (y' - y).  The backward pass gives
+ * exit_i^2 <= exit_{i+1}^2 + 2 a_i' L_{i+1} with a_i' <= a for every block
  * the sample can start in (this function), so, summing over the blocks between, F(y) - F(y')
  * <= 2 a (y' - y) (where the landing block's acc exceeds a, its own F falls slower than by a
  * from a height at least 2 (acc - a) L above the bound) and F(y) - 2 a (J - y) <= exit^2 at each
- * junction J it passes: c'^2 <= F(y') - a^2 and c'^2 <= exit^2 - a^2 there.  The floor (acc >> 2)
- * only acts when c < a + floor: toward a stop the sample lands exactly on the end; else it passes
+ * junction J it passes: (c' - al)^2 <= F(y') and c' <= exit + al <= jmax there (the backward
+ * pass caps each exit at jmax - al).  With al = 0 this is the continuous rule (a margin of a^2);
+ * al = a / 2 is the staircase's exact credit, the float planner's mean speed over a sample that
+ * starts on its braking curve.  Toward a stop the test counts the sampler's own steps
+ * (c - acc / 2).  The floor (acc >> 2) only acts when c < a + floor: toward a stop the sample lands exactly on the end; else it passes
  * its own block's end at most at the exit (the backward pass makes exits under the floor stops).
  * (Not covered: a floor-speed sample that lands past a junction into a block of less than half
  * its acc may sit above F there by one step of that block's acc.)  Exits only rise as blocks
@@ -247,7 +252,7 @@ static void backward(nnik_plan_t *pl)
         const nnik_pl_block_t *n = &pl->q[IDX(pl, k + 1)];
         uint32_t a = brake_acc(pl, (uint8_t)k, n->acc);
         uint64_t t = (uint64_t)a * n->len + (((uint64_t)a * n->lfr) >> 16), e2;
-        uint32_t ex = b->jmax;
+        uint32_t ex = b->jmax > NNIK_PL_ALPHA ? b->jmax - NNIK_PL_ALPHA : 0; /* crossed at most alpha above */
         if (t < (1ULL << 40)) {
             e2 = (uint64_t)n->exit * n->exit + (t << 17);
             if ((uint64_t)ex * ex > e2)

@@ -30,7 +30,7 @@
  *     j2 = min(floor(min(aj JDEV_UM, 2^32 - 1) r / 2^16), 2^32 - 1) (Q16: um^2 / sample^2 * 65536),
  *     jmax = min(vn1, vn2) when j2 = 2^32 - 1, else min(vn1, vn2, isqrt(j2 2^16)),
  * and a backward pass sets every exit speed: the last block's exit is 0, and going back
- *     exit_i = min(jmax_i, isqrt(exit_{i+1}^2 + (t << 17))), t = a len_{i+1} + (a lfr_{i+1} >> 16),
+ *     exit_i = min(jmax_i - NNIK_PL_ALPHA (0 below), isqrt(exit_{i+1}^2 + (t << 17))), t = a len_{i+1} + (a lfr_{i+1} >> 16),
  * a the least acc of block i + 1 and of the blocks a sample may start in and land in it from
  * (block i, and each block m before it while the whole um (len) of the blocks between sum to at
  * most max(vn_m, acc_m) >> 16; nnik_plan.c brake_acc() proves why) (jmax_i itself when t >= 2^40 or jmax^2 <= the sum); an exit below acc_i >> 2 (the sampler's
@@ -44,15 +44,18 @@
  * the blocks and flushes, never on serial timing, and the Python model repeats it exactly.
  *
  * Sampling.  The state is the head block, the distance s along it (Q16 um; rem = its length - s)
- * and the speed v.  Each sample takes the first of these speeds that "may go": up = v + acc (at
- * most vn; above vn: v - acc, at least vn), then hold = min(v, vn) (not when 0); else
- * down = v - acc (0 below acc), or the exit ve when v - acc < ve < v and ve may go, and at least
- * max(acc >> 2, 1).  A speed c may go when every block end it reaches (rem <= c, adding the next
- * block's length to rem each time) it passes at most at that block's exit, or, at a stop's end
- * (exit 0), lands on it: the distance left there, rem (Q16), is at most that block's acc (and
- * v - rem is within acc by the brake test below); and the block it ends in can still brake: c <= ve (c <= acc
- * toward a stop), or with D = rem - c (Q16 um) 2 acc D >= x^2 - ve^2, x = c toward a junction
- * (ve > 0: the continuous need), x = c - floor(acc / 2) toward a stop (the sampler's own steps
+ * and the speed v.  Each sample takes up = v + acc (at most vn; above vn: v - acc, at least vn)
+ * when it "may go"; else, when hold = min(v, vn) (not 0) may go, the fastest that may go between
+ * hold and up, else down = v - acc (0 below acc; or the exit ve when v - acc < ve < v and ve may
+ * go) and, when down may go, the fastest between down and hold (up when hold is 0): lo + d for
+ * d = (hi - lo) >> 1, halved each time, 4 times, kept where it may go; at least max(acc >> 2, 1).
+ * A speed c may go when every block end it reaches (rem <= c, adding the next block's length to
+ * rem each time) it passes at most at that junction's limit jmax, or, at a stop's end (exit 0),
+ * lands on it: the distance left there, rem (Q16), is at most that block's acc (and v - rem is
+ * within acc by the brake test below); and the block it ends in can still brake: x <= ve (c <= acc
+ * toward a stop), or with D = rem - c (Q16 um) 2 acc D >= x^2 - ve^2, x = c - NNIK_PL_ALPHA toward
+ * a junction (ve > 0: the continuous need, less the credit of the sampler's steps; nnik_plan.c
+ * brake_acc() proves it), x = c - floor(acc / 2) toward a stop (the sampler's own steps
  * down, c - acc, c - 2 acc, ..., then the landing: at most (c - acc / 2)^2 / (2 acc)), the right
  * side rounded up as 2^18 (ceil(x / 512)^2 - floor(ve / 512)^2) = 2^18 P (speeds below 2^24, 256 um
  * per sample, so every product fits 32 bits) and D rounded down: with d = floor(D / 65536)
@@ -78,6 +81,9 @@ extern "C" {
 #define NNIK_PL_N 8 /* blocks of lookahead */
 #endif
 /* the queue's slot k places after the head (unsigned: no 16-bit division) */
+#ifndef NNIK_PL_ALPHA
+#define NNIK_PL_ALPHA 0UL /* Q16 um/sample^2: the brake test's credit, at most half of every block's acc (MachineConfig.brake_alpha_q16) */
+#endif
 #define NNIK_PL_IDX(pl, k) ((uint8_t)((uint8_t)((pl)->head + (k)) % NNIK_PL_N))
 #define NNIK_PL_DOT_MARGIN 8 /* Q30: the unit vectors' dot product less this is at most the exact cosine */
 #define NNIK_PL_REVERSAL 1073 /* Q30: a dot product within this of -1 is a reversal (grbl: 0.999999) */

@@ -26,26 +26,25 @@ static uint16_t shr9(uint32_t t)
 }
 
 /* after moving c this sample (rem > c left), can the block still brake to its exit e?  Toward
- * a junction (e > 0) by the continuous need (c^2 - e^2) / (2 acc); toward a stop (e = 0: the
- * sampler lands on the end at most at acc, can_go) by its own steps c - acc, c - 2 acc, ...,
- * which need at most (c - acc / 2)^2 / (2 acc) (equal at c = k acc, a convex bound between).  So
- * it can when c <= e (c <= acc toward a stop), or when D = rem - c (Q16 um) holds
- * 2 acc D >= x^2 - e^2, x = c (c - floor(acc / 2) toward a stop), rounded up as 2^18 P,
+ * a junction (e > 0) by (x^2 - e^2) / (2 acc) with x = c - NNIK_PL_ALPHA (nnik_plan.c brake_acc()
+ * proves it); toward a stop (e = 0: the sampler lands on the end at most at acc, can_go) by its
+ * own steps c - acc, c - 2 acc, ..., which need at most (c - acc / 2)^2 / (2 acc) (equal at
+ * c = k acc, a convex bound between).  So it can when x <= e (c <= acc toward a stop), or when
+ * D = rem - c (Q16 um) holds 2 acc D >= x^2 - e^2 (x = c - floor(acc / 2) toward a stop), rounded up as 2^18 P,
  * P = ceil(x / 512)^2 - floor(e / 512)^2, and D rounded down: it passes when d = floor(D / 65536)
  * (whole um) > dbig, else it needs floor(floor(acc / 32) floor(D / 2048) / 2) >= P. */
 static uint8_t can_brake(uint32_t c, uint32_t r_um, uint16_t r_fr, const nnik_pl_block_t *b)
 {
     uint32_t d, p, ch = c >> 16, x = c;
     uint16_t cq, eq;
-    if (c <= (b->exit ? b->exit : b->acc))
+    if (c <= (b->exit ? b->exit + NNIK_PL_ALPHA : b->acc))
         return 1;
     if ((uint16_t)c > r_fr)
         ch++;
     d = r_um - ch;
     if (d > b->dbig) /* 2 acc d > 2^32 - 1 > any 4 P */
         return 1;
-    if (!b->exit)
-        x -= b->acc >> 1;
+    x -= b->exit ? NNIK_PL_ALPHA : b->acc >> 1;
     cq = shr9(x + 511); /* < 2^24: <= 2^15 */
     eq = shr9(b->exit);
     p = nnik_mul16(cq, cq) - nnik_mul16(eq, eq);
@@ -54,9 +53,9 @@ static uint8_t can_brake(uint32_t c, uint32_t r_um, uint16_t r_fr, const nnik_pl
     return (((b->acc >> 5) * ((d << 5) | ((uint16_t)(r_fr - (uint16_t)c) >> 11))) >> 1) >= p;
 }
 
-/* may the sample go at c?  Each block end it reaches it passes at most at that block's exit, or
- * lands on it when it is a stop (exit 0) and the distance left to it, rem (Q16, <= c), is at
- * most that block's acc (the step to rest; the step from v to rem is within the head block's acc
+/* may the sample go at c?  Each block end it reaches it lands on when it is a stop (exit 0) and
+ * the distance left to it, rem (Q16, <= c), is at most that block's acc, else passes at most at
+ * the junction's limit jmax (the step to rest; the step from v to rem is within the head block's acc
  * by the brake test that let v go: (v - acc / 2)^2 / (2 acc) >= v - acc); and the block it ends
  * in can still brake to its exit. */
 static uint8_t can_go(const nnik_plan_t *pl, uint32_t c)
@@ -67,8 +66,10 @@ static uint8_t can_go(const nnik_plan_t *pl, uint32_t c)
     uint8_t k = 0;
     while (reaches(c, r_um, r_fr)) {
         rem = (r_um << 16) + r_fr; /* rem <= c < 2^24 */
-        if (c > b->exit)
-            return !b->exit && rem <= b->acc;
+        if (!b->exit)
+            return rem <= b->acc;
+        if (c > b->jmax)
+            return 0;
         b = &pl->q[IDX(pl, ++k)]; /* exit > 0: b is not the last block */
         rem += b->lfr;
         r_fr = (uint16_t)rem;

@@ -10,8 +10,9 @@ and rounding; in short):
   block and of the blocks a sample may start in and land in it from), the last queued block
   ending at rest;
   the sampler changes speed by at most the block's acceleration per sample (the forward pass is
-  implicit) and passes a block end only at most at its exit, able to brake in the block it
-  lands in (nnik.bench.planner_oracle is the float grbl planner it is checked against);
+  implicit) and passes a block end at most at its junction's limit, able to brake in the block it
+  lands in, with the brake test's credit (MachineConfig.brake_alpha_q16, NNIK_PL_ALPHA)
+  (nnik.bench.planner_oracle is the float grbl planner it is checked against);
 * determinism: samples are taken only while the queue is full (until the head block is left
   behind) or flushed (until it is empty), so they depend on the block order alone.
 
@@ -142,6 +143,10 @@ class Planner:
         self.s = 0  # Q16 um along the head block
         self.v = 0
         self.acc = cfg.acc_q16
+        self.alpha = cfg.brake_alpha_q16  # the brake test's credit (NNIK_PL_ALPHA)
+        # block ends passed at most at their junction's limit; at most at their exit with the closed-loop
+        # reference's rule and with whole-arc blocks (planner_arc: Python only, as before the credit)
+        self.cross_jmax = cfg.speed_search and not cfg.arc_blocks
 
     def full(self) -> bool:
         return len(self.q) == self.n
@@ -182,6 +187,9 @@ class Planner:
     def push_arc(self, pts, r: int, feed: int, tool: int, index: int) -> bool:
         """An arc from the last point through the chord ends pts (radius r um) as one block
         (planner_arc's rules); False (nothing queued) where planner_arc keeps it chords."""
+        if self.cross_jmax:
+            raise ValueError("an arc block needs MachineConfig.arc_blocks (the sampler's rule for arcs: no brake "
+                             "credit, block ends at most at their exits)")
         got = arc_chords(self.last, pts, r, self.acc, length_q, self.vertex)
         if got is None:
             return False
@@ -198,7 +206,8 @@ class Planner:
         for k in range(len(q) - 2, -1, -1):
             b, n = q[k], q[k + 1]
             a = brake_acc(q, k)
-            t, ex = a * n.len + ((a * n.lfr) >> 16), b.jmax
+            t = a * n.len + ((a * n.lfr) >> 16)
+            ex = b.jmax - self.alpha if b.jmax > self.alpha else 0  # crossed at most alpha above it
             if t < 1 << 40:
                 e2 = n.exit * n.exit + (t << 17)
                 if ex * ex > e2:
@@ -210,32 +219,37 @@ class Planner:
             b.exit = ex
 
     @staticmethod
-    def _can_brake(c: int, rem: int, ve: int, acc: int) -> bool:
-        """nnik_plan_sample.c can_brake: c <= ve (toward a stop, ve = 0: c <= acc), or 2 acc (rem - c) >=
-        x^2 - ve^2 with x = c toward a junction, c - floor(acc / 2) toward a stop (the sampler's own
-        steps down, then it lands), rounded against it (acc / 32, D in 1/32 um)."""
-        if c <= ve or (not ve and c <= acc):
+    def _can_brake(c: int, rem: int, ve: int, acc: int, alpha: int) -> bool:
+        """nnik_plan_sample.c can_brake: c <= ve + alpha (toward a stop, ve = 0: c <= acc), or
+        2 acc (rem - c) >= x^2 - ve^2 with x = c - alpha toward a junction, c - floor(acc / 2)
+        toward a stop (the sampler's own steps down, then it lands), rounded against it (acc / 32,
+        D in 1/32 um)."""
+        if c <= (ve + alpha if ve else acc):
             return True
         if rem <= c:
             return False
         d = (rem - c) >> 16
         if d > U32 // (2 * acc):
             return True
-        cq, eq = (c - (0 if ve else acc >> 1) + 511) >> 9, ve >> 9
+        cq, eq = (c - (alpha if ve else acc >> 1) + 511) >> 9, ve >> 9
         p = cq * cq - eq * eq
         return ((acc >> 5) * ((rem - c) >> 11)) >> 1 >= p
 
     def can_go(self, c: int, rem: int) -> bool:
-        """nnik_plan_sample.c can_go: each block end the sample reaches (rem <= c) it passes at most at
-        that block's exit, or lands on it when it is a stop (exit 0) and rem <= that block's acc,
-        and the block it ends in can still brake."""
+        """nnik_plan_sample.c can_go: each block end the sample reaches (rem <= c) it lands on when
+        it is a stop (exit 0) and rem <= that block's acc, else passes at most at the junction's
+        limit (jmax; at most at the exit where cross_jmax is False), and the block it
+        ends in can still brake."""
         q, k = self.q, 0
         while rem <= c:
-            if c > q[k].exit:
-                return not q[k].exit and rem <= q[k].acc
+            b = q[k]
+            if not b.exit:
+                return rem <= b.acc
+            if c > (b.jmax if self.cross_jmax else b.exit):
+                return False
             k += 1
             rem += q[k].l16
-        return self._can_brake(c, rem, q[k].exit, q[k].acc)
+        return self._can_brake(c, rem, q[k].exit, q[k].acc, self.alpha)
 
     def fastest(self, lo: int, hi: int, rem: int) -> int:
         """nnik_plan_sample.c fastest(): from lo (may go) toward hi (may not), lo + d for

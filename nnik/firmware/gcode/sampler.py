@@ -45,15 +45,15 @@ class Arrays:
 _brakes = Planner._can_brake  # the brake test, as the chip does it (inlined below where it is hot)
 
 
-def _cruise_len(c: int, rem: int, ve: int, acc: int, most: int) -> int:
+def _cruise_len(c: int, rem: int, ve: int, acc: int, alpha: int, most: int) -> int:
     """How many samples j = 0.. at speed c pass the brake test with rem - j c left (at most
     most): the test is monotone in the distance left, so bisect for the first that fails."""
-    if _brakes(c, rem - (most - 1) * c, ve, acc):
+    if _brakes(c, rem - (most - 1) * c, ve, acc, alpha):
         return most
     lo, hi = 0, most - 1  # passes at lo (checked by the caller), fails at hi
     while hi - lo > 1:
         mid = (lo + hi) >> 1
-        if _brakes(c, rem - mid * c, ve, acc):
+        if _brakes(c, rem - mid * c, ve, acc, alpha):
             lo = mid
         else:
             hi = mid
@@ -64,7 +64,7 @@ def _drain(pl: Planner, flushing: bool, X: list, Y: list, V: list, B: list, stop
     """Sample while the queue is ready (full, or not empty when flushing), appending each
     sample's point, speed used and block push index; stops[row]: the path length moved by a
     sample that stops (the others move their speed)."""
-    q, n = pl.q, pl.n
+    q, n, alpha = pl.q, pl.n, pl.alpha
     s, v = pl.s, pl.v
     while q and (flushing or len(q) == n):
         b = q[0]
@@ -83,8 +83,8 @@ def _drain(pl: Planner, flushing: bool, X: list, Y: list, V: list, B: list, stop
             else:
                 c = v
                 most = (rem - 1) // c if c else 0  # samples at c that stay inside the block
-                if most >= BULK_MIN and arc is None and _brakes(c, rem, ex, acc):
-                    k = _cruise_len(c, rem, ex, acc, most)
+                if most >= BULK_MIN and arc is None and _brakes(c, rem, ex, acc, alpha):
+                    k = _cruise_len(c, rem, ex, acc, alpha, most)
                     su = (s + c * np.arange(1, k + 1, dtype=np.int64)) >> 16
                     X.extend((sx + ((ux * su) >> 30)).tolist())
                     Y.extend((sy + ((uy * su) >> 30)).tolist())
@@ -97,7 +97,7 @@ def _drain(pl: Planner, flushing: bool, X: list, Y: list, V: list, B: list, stop
             if rem <= c:
                 ok = pl.can_go(c, rem)
             else:
-                ok = c <= ex or _brakes(c, rem, ex, acc)
+                ok = _brakes(c, rem, ex, acc, alpha)
             if not ok:
                 c = pl.slower(c, v, rem)
             s += c

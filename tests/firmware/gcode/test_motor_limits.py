@@ -144,3 +144,27 @@ def test_no_motor_limits_no_motor_defines():
     cfg = default_machine(scenario("corexy_nonlinear", {}))
     assert not cfg.motor_rows and not any(k.startswith("NNIK_GC_M0") or k.startswith("NNIK_GC_MOTOR")
                                           for k in cfg.defines())
+
+
+@pytest.mark.parametrize("name,linear", MACHINES, ids=["corexy_linear", "corexy_nonlinear", "galvo"])
+@settings(max_examples=40, deadline=None, database=None, suppress_health_check=list(HealthCheck))
+@given(fv=st.floats(0.15, 1.5), fa=st.floats(0.15, 1.5), split=st.floats(0.5, 2.0),
+       moves=st.lists(st.tuples(st.integers(-300_000, 300_000), st.integers(-300_000, 300_000)), min_size=1, max_size=20))
+def test_every_block_gets_at_least_twice_the_brake_credit(name, linear, fv, fa, split, moves):
+    """The sampler's brake test credit (MachineConfig.brake_alpha_q16, NNIK_PL_ALPHA) is at most half
+    of every block's acceleration, after the motors' caps too: its safety argument needs it
+    (nnik_plan.c brake_acc())."""
+    vn, an = natural(name, linear)
+    try:
+        scn = scenario(name, {"motor_max_speed": [fv * vn, fv * vn * split], "motor_max_accel": [fa * an, fa * an / split]},
+                       linear)
+    except NnikError:
+        return
+    cfg = default_machine(scn)
+    pl = Planner(cfg)
+    assert pl.alpha == cfg.brake_alpha_q16 > 0
+    for dx, dy in moves:
+        pl.push(pl.last[0] + dx, pl.last[1] + dy, cfg.max_feed_um_min, 0, 0)
+        if pl.q:
+            assert pl.q[-1].acc >= 2 * pl.alpha, (pl.q[-1].acc, pl.alpha)
+        del pl.q[:-1]

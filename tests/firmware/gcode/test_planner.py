@@ -5,6 +5,7 @@ the deviation rule, the stop at rest on the end point, and samples on the progra
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -14,6 +15,7 @@ from hypothesis import strategies as st
 from nnik.bench.planner_oracle import junction_limit
 from nnik.firmware.config import MachineConfig
 from nnik.firmware.gcode.motion import interpret
+from nnik.firmware.gcode.planner import Planner
 from nnik.firmware.gcode.sampler import run_ops
 
 CFG = MachineConfig(origin_um=(0, 0))  # 1000 mm/s^2 = 1 um/sample^2 = 65536 Q16; 3000 mm/min = 50 um/sample
@@ -138,3 +140,15 @@ def test_bad_motion_settings_are_one_line(kw, msg):
     with pytest.raises(ValueError, match=msg) as exc:
         MachineConfig(origin_um=(0, 0), **kw)
     assert "\n" not in str(exc.value)
+
+
+@settings(max_examples=60, deadline=None, database=None)
+@given(ax=st.integers(100, 3_999), ay=st.integers(100, 3_999), hz=st.sampled_from([250, 500, 1000, 2000]),
+       dx=st.integers(-500_000, 500_000), dy=st.integers(-500_000, 500_000))
+def test_the_brake_credit_is_half_the_least_axis_acceleration_and_at_most_half_a_blocks(ax, ay, hz, dx, dy):
+    cfg = MachineConfig(origin_um=(0, 0), sample_hz=hz, accel_um_s2=(ax * 1000, ay * 1000))
+    assert cfg.brake_alpha_q16 == min(cfg.acc_q16) >> 1
+    assert replace(cfg, speed_search=False).brake_alpha_q16 == 0 == replace(cfg, arc_blocks=True).brake_alpha_q16
+    pl = Planner(cfg)
+    pl.push(dx, dy, cfg.max_feed_um_min, 0, 0)
+    assert not pl.q or pl.q[0].acc >= 2 * pl.alpha
