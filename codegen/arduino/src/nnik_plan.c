@@ -218,8 +218,9 @@ static uint32_t junction(const nnik_pl_block_t *a, const nnik_pl_block_t *b)
  * pass caps each exit at jmax - al).  With al = 0 this is the continuous rule (a margin of a^2);
  * al = a / 2 is the staircase's exact credit, the float planner's mean speed over a sample that
  * starts on its braking curve.  Toward a stop the test counts the sampler's own steps
- * (c - acc / 2).  The floor (acc >> 2) only acts when c < a + floor: toward a stop the sample lands exactly on the end; else it passes
- * its own block's end at most at the exit (the backward pass makes exits under the floor stops).
+ * (c - acc / 2).  The floor (acc >> 2) only acts when c < a + floor: toward a stop the sample
+ * lands exactly on the end; else it passes its own block's end at most at the exit (the backward
+ * pass makes exits under the floor stops).
  * (Not covered: a floor-speed sample that lands past a junction into a block of less than half
  * its acc may sit above F there by one step of that block's acc.)  Exits only rise as blocks
  * arrive and as blocks leave the queue (a only rises), so F only rises: an accepted state

@@ -80,10 +80,10 @@ extern "C" {
 #ifndef NNIK_PL_N
 #define NNIK_PL_N 8 /* blocks of lookahead */
 #endif
-/* the queue's slot k places after the head (unsigned: no 16-bit division) */
 #ifndef NNIK_PL_ALPHA
 #define NNIK_PL_ALPHA 0UL /* Q16 um/sample^2: the brake test's credit, at most half of every block's acc (MachineConfig.brake_alpha_q16) */
 #endif
+/* the queue's slot k places after the head (unsigned: no 16-bit division) */
 #define NNIK_PL_IDX(pl, k) ((uint8_t)((uint8_t)((pl)->head + (k)) % NNIK_PL_N))
 #define NNIK_PL_DOT_MARGIN 8 /* Q30: the unit vectors' dot product less this is at most the exact cosine */
 #define NNIK_PL_REVERSAL 1073 /* Q30: a dot product within this of -1 is a reversal (grbl: 0.999999) */

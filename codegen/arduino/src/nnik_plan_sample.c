@@ -30,7 +30,8 @@ static uint16_t shr9(uint32_t t)
  * proves it); toward a stop (e = 0: the sampler lands on the end at most at acc, can_go) by its
  * own steps c - acc, c - 2 acc, ..., which need at most (c - acc / 2)^2 / (2 acc) (equal at
  * c = k acc, a convex bound between).  So it can when x <= e (c <= acc toward a stop), or when
- * D = rem - c (Q16 um) holds 2 acc D >= x^2 - e^2 (x = c - floor(acc / 2) toward a stop), rounded up as 2^18 P,
+ * D = rem - c (Q16 um) holds 2 acc D >= x^2 - e^2 (x = c - floor(acc / 2) toward a stop), rounded
+ * up as 2^18 P,
  * P = ceil(x / 512)^2 - floor(e / 512)^2, and D rounded down: it passes when d = floor(D / 65536)
  * (whole um) > dbig, else it needs floor(floor(acc / 32) floor(D / 2048) / 2) >= P. */
 static uint8_t can_brake(uint32_t c, uint32_t r_um, uint16_t r_fr, const nnik_pl_block_t *b)
@@ -54,10 +55,10 @@ static uint8_t can_brake(uint32_t c, uint32_t r_um, uint16_t r_fr, const nnik_pl
 }
 
 /* may the sample go at c?  Each block end it reaches it lands on when it is a stop (exit 0) and
- * the distance left to it, rem (Q16, <= c), is at most that block's acc, else passes at most at
- * the junction's limit jmax (the step to rest; the step from v to rem is within the head block's acc
- * by the brake test that let v go: (v - acc / 2)^2 / (2 acc) >= v - acc); and the block it ends
- * in can still brake to its exit. */
+ * the distance left to it, rem (Q16, <= c), is at most that block's acc (the step to rest; the
+ * step from v to rem is within the head block's acc by the brake test that let v go:
+ * (v - acc / 2)^2 / (2 acc) >= v - acc), else passes at most at the junction's limit jmax; and the
+ * block it ends in can still brake to its exit. */
 static uint8_t can_go(const nnik_plan_t *pl, uint32_t c)
 {
     const nnik_pl_block_t *b = &pl->q[pl->head];
