@@ -99,13 +99,20 @@ class MachineConfig:
         return rows, ranges.motor_q16(self.motor_vc_um_s, self.sample_hz, 1, ranges.SPEED_Q16_LIMIT)
 
     @property
+    def brake_credit(self) -> bool:
+        """The G-code firmware's sampler rule (the brake test's credit, block ends passed at most at
+        the junction's limit): not the closed-loop reference's (speed_search False) nor whole-arc
+        blocks' (planner_arc: their acc may be under twice the credit), which keep the rule before."""
+        return self.speed_search and not self.arc_blocks
+
+    @property
     def brake_alpha_q16(self) -> int:
         """The sampler's brake test credit (nnik_plan.h NNIK_PL_ALPHA, Q16 um/sample^2): half the
         least acceleration any block may get (an axis' limit, or a motor's after the IK: a block
         along u has acc >= A 2^15 / (|c . u| + d + 1) >= A 2^15 / (ceil|c| + d + 1)), so that it is
         at most half of every block's acc; 0 for the closed-loop reference's rule (speed_search
         False) and for whole-arc blocks (planner_arc: their acc may be less)."""
-        if not self.speed_search or self.arc_blocks:
+        if not self.brake_credit:
             return 0
         least = min(self.acc_q16)
         if self.motor_rows:

@@ -144,9 +144,7 @@ class Planner:
         self.v = 0
         self.acc = cfg.acc_q16
         self.alpha = cfg.brake_alpha_q16  # the brake test's credit (NNIK_PL_ALPHA)
-        # block ends passed at most at their junction's limit; at most at their exit with the closed-loop
-        # reference's rule and with whole-arc blocks (planner_arc: Python only, as before the credit)
-        self.cross_jmax = cfg.speed_search and not cfg.arc_blocks
+        self.cross_jmax = cfg.brake_credit  # block ends passed at most at their junction's limit (else: exit)
 
     def full(self) -> bool:
         return len(self.q) == self.n

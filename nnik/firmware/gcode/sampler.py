@@ -97,7 +97,7 @@ def _drain(pl: Planner, flushing: bool, X: list, Y: list, V: list, B: list, stop
             if rem <= c:
                 ok = pl.can_go(c, rem)
             else:
-                ok = _brakes(c, rem, ex, acc, alpha)
+                ok = (ex and c <= ex + alpha) or _brakes(c, rem, ex, acc, alpha)
             if not ok:
                 c = pl.slower(c, v, rem)
             s += c
